@@ -1,0 +1,43 @@
+#pragma once
+/// \file File-system helpers every command uses: atomic output, input protection, hashing.
+#include <filesystem>
+#include <string>
+
+namespace s2c {
+
+/// A temporary file beside `target` that becomes `target` on commit() (rename is atomic on
+/// POSIX within one file system). Destroyed without commit, it removes the temporary file,
+/// so a failed run leaves nothing behind. The temporary name keeps the target's extension
+/// because writers choose the format by extension.
+class AtomicFile {
+ public:
+  explicit AtomicFile(std::filesystem::path target);
+  ~AtomicFile();
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+
+  const std::filesystem::path& temp_path() const { return temp_; }
+  const std::filesystem::path& target() const { return target_; }
+  /// fsyncs the temporary file and renames it onto the target. \throw IoError
+  void commit();
+
+ private:
+  std::filesystem::path target_, temp_;
+  bool committed_ = false;
+};
+
+/// Writes `content` to `path` atomically. \throw IoError
+void write_file_atomic(const std::filesystem::path& path, const std::string& content);
+
+/// Reads a whole file. \throw IoError if it cannot be opened or read.
+std::string read_file(const std::filesystem::path& path);
+
+/// \throw InvalidInput if `output` names the same file as `input` (inputs are never modified).
+void refuse_same_file(const std::filesystem::path& input, const std::filesystem::path& output);
+
+/// Lower-case hex SHA-256 of a file's bytes. \throw IoError
+std::string sha256_file(const std::filesystem::path& path);
+/// Lower-case hex SHA-256 of a byte string.
+std::string sha256_bytes(const std::string& bytes);
+
+}  // namespace s2c

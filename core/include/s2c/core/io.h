@@ -1,0 +1,37 @@
+#pragma once
+/// \file Reading and writing meshes by extension (.ply .stl .obj .off, and legacy .vtk for reading),
+/// with the validation OpenMesh's readers do not do, and atomic output.
+#include <filesystem>
+#include <string>
+
+#include "s2c/core/mesh.h"
+
+namespace s2c {
+
+enum class MeshFormat { ply, stl, obj, off, vtk };
+
+/// The format implied by a file's extension (case-insensitive).
+/// \throw InvalidInput naming the file when the extension is not a mesh format.
+MeshFormat mesh_format(const std::filesystem::path& path);
+
+/// Reads every face and vertex of a mesh file as stored (STL vertices welded by exact position;
+/// polygons fan-triangulated; unreferenced vertices kept).
+/// \throw InvalidInput naming the file and the problem: unknown extension, truncated data,
+///        NaN/inf coordinates, face indices out of range, header counts the file cannot hold,
+///        no faces at all (unless allow_empty).
+/// \throw IoError when the file cannot be opened.
+TriangleSoup read_soup(const std::filesystem::path& path, bool allow_empty = false);
+
+/// read_soup followed by soup_to_mesh.
+Mesh read_mesh(const std::filesystem::path& path);
+
+struct WriteOptions {
+  bool binary = true;          ///< PLY and STL: binary little-endian (ASCII otherwise)
+  bool vertex_normals = true;  ///< PLY/OBJ/OFF: write per-vertex normals (computed if absent)
+};
+
+/// Writes atomically (temporary file + rename in the target folder): a failed or killed write
+/// leaves no partial file. \throw IoError on failure, InvalidInput for an unknown extension.
+void write_mesh(const Mesh& mesh, const std::filesystem::path& path, const WriteOptions& options = {});
+
+}  // namespace s2c

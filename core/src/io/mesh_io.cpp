@@ -1,0 +1,174 @@
+#include "s2c/core/io.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <fmt/format.h>
+
+#include "header_check.h"
+#include "s2c/core/errors.h"
+#include "s2c/core/files.h"
+#include "soup_importer.h"
+
+namespace fs = std::filesystem;
+
+namespace s2c {
+namespace {
+
+void silence_openmesh() {
+  // OpenMesh prints its own diagnostics to stderr; ours name the file and the problem instead.
+  static const bool once = [] {
+    omerr().disable();
+    omlog().disable();
+    omout().disable();
+    return true;
+  }();
+  (void)once;
+}
+
+void validate_soup(const fs::path& path, const TriangleSoup& soup, const io_detail::DeclaredCounts& declared,
+                   std::size_t face_records, bool allow_empty) {
+  if (declared.vertices && soup.vertices.size() != *declared.vertices)
+    throw InvalidInput(fmt::format("{}: truncated or malformed: the header declares {} vertices but {} could be read",
+                                   path.string(), *declared.vertices, soup.vertices.size()));
+  if (declared.faces && face_records != *declared.faces && !declared.binary)
+    throw InvalidInput(fmt::format("{}: truncated or malformed: the header declares {} faces but {} could be read",
+                                   path.string(), *declared.faces, face_records));
+  for (std::size_t i = 0; i < soup.vertices.size(); ++i)
+    if (!soup.vertices[i].allFinite())
+      throw InvalidInput(fmt::format("{}: vertex {} has a non-finite coordinate ({}, {}, {})", path.string(), i,
+                                     soup.vertices[i].x(), soup.vertices[i].y(), soup.vertices[i].z()));
+  if (soup.faces.empty() && !allow_empty)
+    throw InvalidInput(fmt::format("{}: the mesh has no faces ({} vertices){}", path.string(), soup.vertices.size(),
+                                   soup.vertices.empty() ? "" : "; is it a point cloud?"));
+}
+
+}  // namespace
+
+MeshFormat mesh_format(const fs::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (ext == ".ply") return MeshFormat::ply;
+  if (ext == ".stl") return MeshFormat::stl;
+  if (ext == ".obj") return MeshFormat::obj;
+  if (ext == ".off") return MeshFormat::off;
+  if (ext == ".vtk") return MeshFormat::vtk;
+  throw InvalidInput(fmt::format("{}: unknown mesh extension '{}' (use .ply, .stl, .obj or .off)", path.string(), ext));
+}
+
+TriangleSoup read_soup(const fs::path& path, bool allow_empty) {
+  silence_openmesh();
+  const MeshFormat format = mesh_format(path);
+  const io_detail::DeclaredCounts declared = io_detail::check_header(path, format);
+  if (format == MeshFormat::vtk) {
+    TriangleSoup soup = io_detail::read_vtk(path);
+    validate_soup(path, soup, {}, soup.faces.size(), allow_empty);
+    return soup;
+  }
+  io_detail::SoupImporter importer;
+  OpenMesh::IO::Options opt = OpenMesh::IO::Options::VertexNormal;
+  if (!OpenMesh::IO::IOManager().read(path.string(), importer, opt))
+    throw InvalidInput(fmt::format("{}: {}", path.string(),
+                                   importer.first_error.empty() ? "malformed file (the reader rejected it)" : importer.first_error));
+  if (!importer.first_error.empty()) throw InvalidInput(fmt::format("{}: {}", path.string(), importer.first_error));
+  TriangleSoup soup = std::move(importer.soup);
+  if (!soup.normals.empty()) soup.normals.resize(soup.vertices.size(), Eigen::Vector3d::Zero());
+  validate_soup(path, soup, declared, importer.face_records, allow_empty);
+  return soup;
+}
+
+Mesh read_mesh(const fs::path& path) {
+  Mesh mesh;
+  soup_to_mesh(read_soup(path), mesh);
+  return mesh;
+}
+
+void write_mesh(const Mesh& mesh_in, const fs::path& path, const WriteOptions& options) {
+  silence_openmesh();
+  const MeshFormat format = mesh_format(path);
+  if (format == MeshFormat::vtk) throw InvalidInput(fmt::format("{}: writing .vtk is not supported", path.string()));
+  OpenMesh::IO::Options opt;
+  if (options.binary && (format == MeshFormat::ply || format == MeshFormat::stl)) {
+    opt += OpenMesh::IO::Options::Binary;
+    opt += OpenMesh::IO::Options::LSB;
+  }
+  const Mesh* mesh = &mesh_in;
+  Mesh with_normals;
+  if (options.vertex_normals && format != MeshFormat::stl) {
+    opt += OpenMesh::IO::Options::VertexNormal;
+    with_normals = mesh_in;
+    with_normals.update_normals();
+    mesh = &with_normals;
+  }
+  AtomicFile out(path);
+  if (!OpenMesh::IO::write_mesh(*mesh, out.temp_path().string(), opt))
+    throw IoError(fmt::format("{}: writing failed (disk full or not writable?)", path.string()));
+  out.commit();
+}
+
+// ---------------------------------------------------------------------------------------------
+
+std::size_t soup_to_mesh(const TriangleSoup& soup, Mesh& mesh) {
+  mesh.clear();
+  mesh.reserve(soup.vertices.size(), soup.faces.size() * 3 / 2, soup.faces.size());
+  std::vector<Mesh::VertexHandle> vh(soup.vertices.size());
+  for (std::size_t i = 0; i < soup.vertices.size(); ++i) vh[i] = mesh.add_vertex(to_om(soup.vertices[i]));
+  if (!soup.normals.empty())
+    for (std::size_t i = 0; i < soup.vertices.size(); ++i) mesh.set_normal(vh[i], to_om(soup.normals[i]));
+  std::size_t duplicated = 0;
+  for (const auto& f : soup.faces) {
+    std::array<Mesh::VertexHandle, 3> h{vh[f[0]], vh[f[1]], vh[f[2]]};
+    if (mesh.add_face(h[0], h[1], h[2]).is_valid()) continue;
+    // A complex edge or a non-manifold vertex: keep the face on its own copies of the
+    // vertices so nothing is lost; repair merges them back where it can.
+    for (auto& x : h) x = mesh.add_vertex(mesh.point(x));
+    mesh.add_face(h[0], h[1], h[2]);
+    ++duplicated;
+  }
+  return duplicated;
+}
+
+TriangleSoup mesh_to_soup(const Mesh& mesh) {
+  TriangleSoup soup;
+  std::vector<int> index(mesh.n_vertices(), -1);
+  for (auto v : mesh.vertices()) {
+    index[v.idx()] = static_cast<int>(soup.vertices.size());
+    soup.vertices.push_back(to_eigen(mesh.point(v)));
+  }
+  for (auto f : mesh.faces()) {
+    std::array<int, 3> t{};
+    int k = 0;
+    for (auto v : f.vertices()) t[k++] = index[v.idx()];
+    soup.faces.push_back(t);
+  }
+  return soup;
+}
+
+Bounds bounds(const TriangleSoup& soup) {
+  Bounds b;
+  bool first = true;
+  for (const auto& f : soup.faces)
+    for (int i : f) {
+      const auto& p = soup.vertices[i];
+      if (first) { b.min = b.max = p; first = false; }
+      b.min = b.min.cwiseMin(p);
+      b.max = b.max.cwiseMax(p);
+    }
+  return b;
+}
+
+Bounds bounds(const Mesh& mesh) {
+  Bounds b;
+  bool first = true;
+  for (auto v : mesh.vertices()) {
+    const Eigen::Vector3d p = to_eigen(mesh.point(v));
+    if (first) { b.min = b.max = p; first = false; }
+    b.min = b.min.cwiseMin(p);
+    b.max = b.max.cwiseMax(p);
+  }
+  return b;
+}
+
+}  // namespace s2c

@@ -1,0 +1,321 @@
+#include "s2c/core/stream.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "s2c/core/errors.h"
+#include "s2c/core/files.h"
+
+namespace fs = std::filesystem;
+
+namespace s2c {
+namespace {
+
+constexpr const char* kFormat = "scan2cad.stream/1";
+
+[[noreturn]] void bad(const fs::path& file, const std::string& what) {
+  throw InvalidInput(fmt::format("{}: {}", file.string(), what));
+}
+
+cv::FileNode need(const cv::FileStorage& fs, const fs::path& file, const char* key) {
+  cv::FileNode n = fs[key];
+  if (n.empty()) bad(file, fmt::format("missing key '{}'", key));
+  return n;
+}
+
+double need_number(const cv::FileStorage& fs, const fs::path& file, const char* key) {
+  cv::FileNode n = need(fs, file, key);
+  if (!n.isReal() && !n.isInt()) bad(file, fmt::format("key '{}' must be a number", key));
+  const double v = n.real();
+  if (!std::isfinite(v)) bad(file, fmt::format("key '{}' is not finite", key));
+  return v;
+}
+
+cv::Mat need_matrix(const cv::FileStorage& fs, const fs::path& file, const char* key, int rows, int cols) {
+  cv::FileNode n = need(fs, file, key);
+  cv::Mat m;
+  try {
+    n >> m;
+  } catch (const cv::Exception&) {
+    bad(file, fmt::format("key '{}' is not an !!opencv-matrix", key));
+  }
+  if (m.empty() || m.rows * m.cols != rows * cols)
+    bad(file, fmt::format("key '{}' must be a {}x{} matrix (found {}x{})", key, rows, cols, m.rows, m.cols));
+  m.convertTo(m, CV_64F);
+  m = m.reshape(1, rows);
+  for (int i = 0; i < m.rows * m.cols; ++i)
+    if (!std::isfinite(m.at<double>(i))) bad(file, fmt::format("key '{}' has a non-finite entry", key));
+  return m;
+}
+
+StreamInfo read_info(const fs::path& file) {
+  if (!fs::exists(file)) bad(file, "missing: a stream directory needs stream.yaml (see docs/formats.md)");
+  cv::FileStorage fs;
+  try {
+    if (!fs.open(file.string(), cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML)) bad(file, "cannot be parsed as YAML");
+  } catch (const cv::Exception& e) {
+    bad(file, fmt::format("malformed YAML: {}", e.err));
+  }
+  StreamInfo info;
+  const std::string format = (std::string)need(fs, file, "format");
+  if (format != kFormat) bad(file, fmt::format("format is '{}', expected '{}'", format, kFormat));
+  const std::string sensor = (std::string)need(fs, file, "sensor");
+  if (sensor == "depth") info.sensor = Sensor::depth;
+  else if (sensor == "laser") info.sensor = Sensor::laser;
+  else bad(file, fmt::format("sensor is '{}', expected depth or laser", sensor));
+  if (!fs["device"].empty()) info.device = (std::string)fs["device"];
+  const double w = need_number(fs, file, "width"), h = need_number(fs, file, "height");
+  if (w < 1 || h < 1 || w > 16384 || h > 16384 || w != std::floor(w) || h != std::floor(h))
+    bad(file, fmt::format("width/height {}x{} out of range (1..16384)", w, h));
+  info.width = static_cast<int>(w);
+  info.height = static_cast<int>(h);
+  info.depth_unit_mm = need_number(fs, file, "depth_unit_mm");
+  if (info.depth_unit_mm <= 0) bad(file, "depth_unit_mm must be positive");
+  cv::Mat K = need_matrix(fs, file, "camera_matrix", 3, 3);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) info.camera_matrix(r, c) = K.at<double>(r, c);
+  if (info.camera_matrix(0, 0) <= 0 || (info.sensor == Sensor::depth && info.camera_matrix(1, 1) <= 0))
+    bad(file, "camera_matrix: focal lengths must be positive");
+  cv::Mat D = need_matrix(fs, file, "dist_coeffs", 1, 5);
+  for (int i = 0; i < 5; ++i) info.dist_coeffs[i] = D.at<double>(i);
+  info.pose_unit_mm = fs["pose_unit_mm"].empty() ? 1.0 : need_number(fs, file, "pose_unit_mm");
+  if (info.pose_unit_mm <= 0) bad(file, "pose_unit_mm must be positive");
+  if (info.sensor == Sensor::laser) {
+    info.profile_step_mm = need_number(fs, file, "profile_step_mm");
+    if (info.profile_step_mm <= 0) bad(file, "profile_step_mm must be positive");
+  }
+  return info;
+}
+
+std::vector<std::string> split_fields(const std::string& line) {
+  std::istringstream ss(line);
+  std::vector<std::string> out;
+  std::string t;
+  while (ss >> t) out.push_back(t);
+  return out;
+}
+
+double parse_double(const fs::path& file, int line, const std::string& tok, const char* what) {
+  char* end = nullptr;
+  const double v = std::strtod(tok.c_str(), &end);
+  if (end == tok.c_str() || *end) bad(file, fmt::format("line {}: {} '{}' is not a number", line, what, tok));
+  if (!std::isfinite(v)) bad(file, fmt::format("line {}: {} is {}", line, what, tok));
+  return v;
+}
+
+template <class F>
+void for_each_record(const fs::path& file, F&& f) {
+  std::ifstream in(file);
+  if (!in) throw IoError(fmt::format("{}: cannot open", file.string()));
+  std::string line;
+  int no = 0;
+  while (std::getline(in, line)) {
+    ++no;
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    f(no, split_fields(line));
+  }
+}
+
+}  // namespace
+
+const char* to_string(Sensor s) { return s == Sensor::depth ? "depth" : "laser"; }
+
+Stream read_stream(const fs::path& dir) {
+  if (!fs::is_directory(dir)) throw InvalidInput(fmt::format("{}: not a stream directory", dir.string()));
+  Stream s;
+  s.dir = dir;
+  s.info = read_info(dir / "stream.yaml");
+  const fs::path index = dir / "depth.txt";
+  if (!fs::exists(index)) bad(index, "missing: the frame index 'timestamp filename' per line");
+  for_each_record(index, [&](int no, const std::vector<std::string>& f) {
+    if (f.size() != 2) bad(index, fmt::format("line {}: expected 'timestamp filename', found {} fields", no, f.size()));
+    StreamFrame fr{parse_double(index, no, f[0], "timestamp"), f[1], no};
+    if (fr.file.find("..") != std::string::npos || fs::path(fr.file).is_absolute())
+      bad(index, fmt::format("line {}: frame path '{}' must stay inside the stream directory", no, fr.file));
+    s.frames.push_back(fr);
+  });
+  if (s.frames.empty()) bad(index, "lists no frames");
+  const fs::path poses = dir / "poses.txt";
+  if (fs::exists(poses)) {
+    for_each_record(poses, [&](int no, const std::vector<std::string>& f) {
+      if (f.size() != 8) bad(poses, fmt::format("line {}: expected 'timestamp tx ty tz qx qy qz qw', found {} fields", no, f.size()));
+      double v[8];
+      for (int i = 0; i < 8; ++i) v[i] = parse_double(poses, no, f[i], i == 0 ? "timestamp" : "pose value");
+      Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
+      if (std::abs(q.norm() - 1.0) > 1e-3)
+        bad(poses, fmt::format("line {}: quaternion has norm {:.6f}, expected 1 (qx qy qz qw order)", no, q.norm()));
+      StreamPose p;
+      p.timestamp = v[0];
+      p.camera_to_world.linear() = q.normalized().toRotationMatrix();
+      p.camera_to_world.translation() = Eigen::Vector3d(v[1], v[2], v[3]) * s.info.pose_unit_mm;
+      s.poses.push_back(p);
+    });
+  }
+  return s;
+}
+
+std::optional<Eigen::Isometry3d> Stream::pose_of(std::size_t frame) const {
+  const double t = frames.at(frame).timestamp;
+  const StreamPose* best = nullptr;
+  for (const auto& p : poses)
+    if (!best || std::abs(p.timestamp - t) < std::abs(best->timestamp - t)) best = &p;
+  if (!best || std::abs(best->timestamp - t) > 0.02) return std::nullopt;
+  return best->camera_to_world;
+}
+
+DepthImage read_depth_png(const fs::path& path) {
+  if (!fs::exists(path)) throw InvalidInput(fmt::format("{}: frame file does not exist", path.string()));
+  cv::Mat img;
+  try {
+    img = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    throw InvalidInput(fmt::format("{}: unreadable frame: {}", path.string(), e.err));
+  }
+  if (img.empty()) throw InvalidInput(fmt::format("{}: unreadable or truncated image", path.string()));
+  if (img.type() != CV_16UC1)
+    throw InvalidInput(fmt::format("{}: frame must be a 16-bit single-channel PNG (found {} channels, depth {})",
+                                   path.string(), img.channels(), img.depth()));
+  DepthImage d;
+  d.width = img.cols;
+  d.height = img.rows;
+  d.data.resize(static_cast<std::size_t>(img.rows) * img.cols);
+  for (int r = 0; r < img.rows; ++r)
+    std::memcpy(&d.data[static_cast<std::size_t>(r) * img.cols], img.ptr<std::uint16_t>(r), img.cols * 2);
+  return d;
+}
+
+DepthImage read_frame(const Stream& s, std::size_t i) {
+  const StreamFrame& f = s.frames.at(i);
+  DepthImage d = read_depth_png(s.dir / f.file);
+  if (d.width != s.info.width || d.height != s.info.height)
+    throw InvalidInput(fmt::format("{}: frame {} is {}x{}, stream.yaml says {}x{}", (s.dir / f.file).string(), i,
+                                   d.width, d.height, s.info.width, s.info.height));
+  return d;
+}
+
+void write_depth_png(const fs::path& path, const DepthImage& d) {
+  cv::Mat img(d.height, d.width, CV_16UC1, const_cast<std::uint16_t*>(d.data.data()));
+  AtomicFile out(path);
+  if (!cv::imwrite(out.temp_path().string(), img, {cv::IMWRITE_PNG_COMPRESSION, 9}))
+    throw IoError(fmt::format("{}: cannot write PNG", path.string()));
+  out.commit();
+}
+
+std::vector<Eigen::Vector3d> deproject(const Stream& s, std::size_t i, const DepthImage& depth,
+                                       std::vector<Eigen::Vector3d>* view_dirs) {
+  const auto& K = s.info.camera_matrix;
+  const double fx = K(0, 0), fy = K(1, 1), cx = K(0, 2), cy = K(1, 2);
+  const Eigen::Isometry3d T = s.pose_of(i).value_or(Eigen::Isometry3d::Identity());
+  const bool distorted = !s.info.dist_coeffs.isZero();
+  std::vector<Eigen::Vector3d> pts;
+  if (view_dirs) view_dirs->clear();
+  for (int v = 0; v < depth.height; ++v)
+    for (int u = 0; u < depth.width; ++u) {
+      const std::uint16_t raw = depth.at(u, v);
+      if (!raw) continue;
+      const double z = raw * s.info.depth_unit_mm;
+      Eigen::Vector3d pc, origin = Eigen::Vector3d::Zero();
+      if (s.info.sensor == Sensor::laser) {
+        // One profile per row: a fan in the sensor's x-z plane, the sensor advanced along +y.
+        origin = Eigen::Vector3d(0, v * s.info.profile_step_mm, 0);
+        pc = Eigen::Vector3d((u - cx) / fx * z, v * s.info.profile_step_mm, z);
+      } else {
+        double x = (u - cx) / fx, y = (v - cy) / fy;
+        if (distorted) {
+          // Invert Brown-Conrady distortion by fixed-point iteration (as cv::undistortPoints does).
+          const auto& k = s.info.dist_coeffs;
+          const double x0 = x, y0 = y;
+          for (int it = 0; it < 8; ++it) {
+            const double r2 = x * x + y * y;
+            const double radial = 1 + k[0] * r2 + k[1] * r2 * r2 + k[4] * r2 * r2 * r2;
+            const double dx = 2 * k[2] * x * y + k[3] * (r2 + 2 * x * x);
+            const double dy = k[2] * (r2 + 2 * y * y) + 2 * k[3] * x * y;
+            x = (x0 - dx) / radial;
+            y = (y0 - dy) / radial;
+          }
+        }
+        pc = Eigen::Vector3d(x * z, y * z, z);
+      }
+      const Eigen::Vector3d pw = T * pc;
+      pts.push_back(pw);
+      if (view_dirs) view_dirs->push_back((T * origin - pw).normalized());
+    }
+  return pts;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+StreamWriter::StreamWriter(fs::path dir, StreamInfo info) : dir_(std::move(dir)), info_(std::move(info)) {
+  if (fs::exists(dir_) && !fs::is_directory(dir_)) throw InvalidInput(fmt::format("{}: exists and is not a directory", dir_.string()));
+  if (fs::is_directory(dir_) && !fs::is_empty(dir_) && !fs::exists(dir_ / "stream.yaml"))
+    throw InvalidInput(fmt::format("{}: exists, is not empty and is not a stream; choose another --out", dir_.string()));
+  const fs::path parent = dir_.parent_path().empty() ? fs::path(".") : dir_.parent_path();
+  fs::create_directories(parent);
+  temp_ = parent / fmt::format(".{}.tmp-{}", dir_.filename().string(), ::getpid());
+  fs::remove_all(temp_);
+  fs::create_directories(temp_ / "depth");
+}
+
+StreamWriter::~StreamWriter() {
+  if (!finished_) {
+    std::error_code ec;
+    fs::remove_all(temp_, ec);
+  }
+}
+
+void StreamWriter::add_frame(double timestamp, const DepthImage& depth, const std::optional<Eigen::Isometry3d>& pose) {
+  const std::string name = fmt::format("depth/{:06d}.png", frames_.size());
+  write_depth_png(temp_ / name, depth);
+  frames_.push_back({timestamp, name, 0});
+  if (pose) poses_.push_back({timestamp, *pose});
+}
+
+void StreamWriter::finish() {
+  {
+    cv::FileStorage fsw((temp_ / "stream.yaml").string(), cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
+    fsw << "format" << kFormat << "sensor" << to_string(info_.sensor) << "device" << info_.device;
+    fsw << "width" << info_.width << "height" << info_.height << "depth_unit_mm" << info_.depth_unit_mm;
+    cv::Mat K(3, 3, CV_64F), D(1, 5, CV_64F);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) K.at<double>(r, c) = info_.camera_matrix(r, c);
+    for (int i = 0; i < 5; ++i) D.at<double>(i) = info_.dist_coeffs[i];
+    fsw << "camera_matrix" << K << "dist_coeffs" << D << "pose_unit_mm" << info_.pose_unit_mm;
+    if (info_.sensor == Sensor::laser) fsw << "profile_step_mm" << info_.profile_step_mm;
+    fsw.release();
+  }
+  std::string index = "# scan2cad stream: timestamp filename\n";
+  for (const auto& f : frames_) index += fmt::format("{:.6f} {}\n", f.timestamp, f.file);
+  write_file_atomic(temp_ / "depth.txt", index);
+  if (!poses_.empty()) {
+    std::string poses = "# timestamp tx ty tz qx qy qz qw (camera-to-world, translation in pose_unit_mm)\n";
+    for (const auto& p : poses_) {
+      const Eigen::Quaterniond q(p.camera_to_world.linear());
+      const Eigen::Vector3d t = p.camera_to_world.translation() / info_.pose_unit_mm;
+      poses += fmt::format("{:.6f} {:.9f} {:.9f} {:.9f} {:.12f} {:.12f} {:.12f} {:.12f}\n", p.timestamp, t.x(), t.y(),
+                           t.z(), q.x(), q.y(), q.z(), q.w());
+    }
+    write_file_atomic(temp_ / "poses.txt", poses);
+  }
+  // Swap the finished folder into place; the old stream (if any) goes only after that succeeded.
+  const fs::path old = temp_.string() + ".old";
+  std::error_code ec;
+  if (fs::exists(dir_)) fs::rename(dir_, old);
+  fs::rename(temp_, dir_, ec);
+  if (ec) {
+    if (fs::exists(old)) fs::rename(old, dir_);
+    throw IoError(fmt::format("{}: cannot move the stream into place: {}", dir_.string(), ec.message()));
+  }
+  fs::remove_all(old, ec);
+  finished_ = true;
+}
+
+}  // namespace s2c

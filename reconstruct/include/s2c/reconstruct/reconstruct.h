@@ -1,0 +1,49 @@
+#pragma once
+/// \file From a recorded scan (stream directory) or a point cloud to a fused cloud and a mesh.
+/// PCL does the work inside reconstruct/src; this header stays light.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "s2c/core/mesh.h"
+
+namespace s2c {
+
+enum class MeshMethod { poisson, gp3 };
+
+struct ReconstructOptions {
+  MeshMethod method = MeshMethod::poisson;
+  double voxel_mm = 0;        ///< fusion voxel; 0 = the measured point spacing
+  int poisson_depth = 0;      ///< octree depth; 0 = cells of about two point spacings (6..10)
+  double trim_mm = 0;         ///< drop surface farther than this from the data; 0 = 3 × spacing
+  int normal_neighbours = 24; ///< k for normal estimation
+  bool remove_outliers = true;
+};
+
+struct ReconstructReport {
+  int frames = 0;
+  std::size_t points_in = 0, points_fused = 0, outliers_removed = 0;
+  double spacing_mm = 0, voxel_mm = 0, trim_mm = 0;
+  int poisson_depth = 0;
+  std::size_t faces_before_trim = 0, faces = 0, vertices = 0;
+};
+
+/// A cloud with normals (oriented towards the sensor) in mm.
+struct OrientedCloud {
+  std::vector<Eigen::Vector3d> points, normals;
+};
+
+/// Reads a stream directory (depth or laser; poses required for now) or a cloud (.ply .pcd) and
+/// fuses it into one cloud with sensor-oriented normals.
+/// \throw InvalidInput naming the file or frame.
+OrientedCloud fuse_input(const std::filesystem::path& input, const ReconstructOptions& options,
+                         ReconstructReport& report);
+
+/// Meshes a fused cloud; regions without data stay open (holes for repair).
+/// \throw ProcessingError when the mesher produces nothing.
+Mesh mesh_cloud(const OrientedCloud& cloud, const ReconstructOptions& options, ReconstructReport& report);
+
+/// Writes a cloud with normals as binary PLY, atomically.
+void write_cloud(const OrientedCloud& cloud, const std::filesystem::path& path);
+
+}  // namespace s2c

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Installs the Debian packages scan2cad needs. Idempotent and non-interactive:
+# packages already present are skipped, apt-get update runs only when something is missing.
+#   scripts/install-deps.sh            product build + tests
+#   scripts/install-deps.sh --bench    also the optional peers the benchmarks compare against
+set -euo pipefail
+
+pkgs=(
+  build-essential cmake ninja-build ccache pkg-config git
+  libeigen3-dev libpcl-dev libopenmesh-dev libembree-dev libopencv-dev
+  libspdlog-dev libfmt-dev nlohmann-json3-dev libcli11-dev libtbb-dev libgmp-dev
+  libgtest-dev libgmock-dev
+  # independent checker used by the tests (CGAL's exact predicates); header-only
+  libcgal-dev
+)
+if [[ "${1:-}" == "--bench" ]]; then
+  pkgs+=(python3-open3d libopenvdb-dev hyperfine)
+fi
+
+missing=()
+for p in "${pkgs[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+if ((${#missing[@]} == 0)); then
+  echo "install-deps: all ${#pkgs[@]} packages present"
+  exit 0
+fi
+
+sudo=""
+if [[ $(id -u) -ne 0 ]]; then sudo="sudo"; fi
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# e2e: the command-line contract of DESIGN.md for every executable of the build:
+# --help exits 0, bad usage exits 2, bad input exits 2 with the file named and no output.
+set -uo pipefail
+bin="$1"; src="$2"; work="$3"
+rm -rf "$work"; mkdir -p "$work"
+failures=0
+fail() { echo "FAIL: $*" >&2; failures=$((failures + 1)); }
+expect_rc() {  # expected-code description command...
+  local want="$1" what="$2"; shift 2
+  "$@" >"$work/stdout" 2>"$work/stderr"; local rc=$?
+  [[ $rc == "$want" ]] || fail "$what: exit $rc, expected $want ($(head -c 300 "$work/stderr"))"
+}
+
+expect_rc 0 "scan2cad --help" "$bin/scan2cad" --help
+grep -q "simulate" "$work/stdout" || fail "scan2cad --help does not list stages"
+expect_rc 2 "scan2cad without a stage" "$bin/scan2cad"
+expect_rc 2 "unknown stage" "$bin/scan2cad" frobnicate
+
+printf 'OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n' > "$work/bad.off"
+cp "$work/bad.off" "$work/bad.copy"
+for exe in "$bin"/scan2cad-*; do
+  name=$(basename "$exe"); stage=${name#scan2cad-}
+  expect_rc 0 "$name --help" "$exe" --help
+  grep -qi "usage" "$work/stdout" || fail "$name --help prints no usage"
+  expect_rc 2 "$name with no arguments" "$exe"
+  expect_rc 2 "$name --no-such-option" "$exe" --no-such-option
+done
+
+# Bad input: exit 2, the file named, no output written, input untouched.
+expect_rc 2 "check on a bad mesh" "$bin/scan2cad" check "$work/bad.off"
+grep -q "bad.off" "$work/stderr" || fail "check's message does not name the file"
+expect_rc 2 "simulate on a bad mesh" "$bin/scan2cad" simulate "$work/bad.off" --out "$work/sim_out"
+[[ ! -e "$work/sim_out" ]] || fail "simulate left output after bad input"
+expect_rc 2 "reconstruct on a missing stream" "$bin/scan2cad" reconstruct "$work/nowhere" -o "$work/rec.ply"
+[[ ! -e "$work/rec.ply" ]] || fail "reconstruct left output after bad input"
+mkdir -p "$work/badstream"; cp -r "$src/fixtures/scans/plate/." "$work/badstream/"
+printf '0.0 depth/000000.png\n1.0 depth/999.png\n' > "$work/badstream/depth.txt"
+expect_rc 2 "reconstruct with a missing frame" "$bin/scan2cad" reconstruct "$work/badstream" -o "$work/rec.ply"
+grep -q "999.png" "$work/stderr" || fail "reconstruct's message does not name the frame"
+[[ ! -e "$work/rec.ply" ]] || fail "reconstruct left output after a bad frame"
+expect_rc 2 "run on a missing input" "$bin/scan2cad" run "$work/nothing.stl" --out "$work/run_out"
+cmp -s "$work/bad.off" "$work/bad.copy" || fail "an input was modified"
+ls -a "$work" | grep -q "\.tmp-" && fail "a temporary file was left behind"
+
+if ((failures)); then echo "e2e cli_contract: $failures failures" >&2; exit 1; fi
+echo "e2e cli_contract: ok"

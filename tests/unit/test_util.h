@@ -1,0 +1,59 @@
+#pragma once
+// Shared helpers for the unit tests: scratch folders, small meshes with known answers.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+
+#include "s2c/core/mesh.h"
+
+namespace s2c::test {
+
+inline std::filesystem::path source_dir() { return S2C_SOURCE_DIR; }
+inline std::filesystem::path shared_dir() { return S2C_SHARED_DIR; }
+inline std::filesystem::path bin_dir() { return S2C_BIN_DIR; }
+
+/// A fresh, empty folder per test (removed at the start of the next run, kept for inspection).
+inline std::filesystem::path scratch_dir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  auto dir = std::filesystem::temp_directory_path() / "s2c_tests" /
+             (std::string(info->test_suite_name()) + "." + info->name());
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+inline void write_text(const std::filesystem::path& p, const std::string& s) {
+  std::ofstream f(p, std::ios::binary);
+  f << s;
+}
+
+/// Axis-aligned cube [lo, lo+size]³, 8 vertices, 12 outward triangles. Vertex indices start at `base`.
+inline void add_cube(TriangleSoup& s, const Eigen::Vector3d& lo, double size, bool inward = false) {
+  const int b = static_cast<int>(s.vertices.size());
+  for (int i = 0; i < 8; ++i)
+    s.vertices.push_back(lo + size * Eigen::Vector3d(i & 1, (i >> 1) & 1, (i >> 2) & 1));
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads) {
+    std::array<int, 3> t1{b + q[0], b + q[1], b + q[2]}, t2{b + q[0], b + q[2], b + q[3]};
+    if (inward) {
+      std::swap(t1[1], t1[2]);
+      std::swap(t2[1], t2[2]);
+    }
+    s.faces.push_back(t1);
+    s.faces.push_back(t2);
+  }
+}
+
+inline TriangleSoup cube(double size = 10.0) {
+  TriangleSoup s;
+  add_cube(s, Eigen::Vector3d::Zero(), size);
+  return s;
+}
+
+/// Icosphere: subdivided icosahedron projected to the sphere (outward).
+TriangleSoup icosphere(const Eigen::Vector3d& center, double radius, int levels);
+
+}  // namespace s2c::test
