@@ -1,6 +1,11 @@
-// Exact predicates: a semi-static floating-point filter decides almost every call; when it
-// cannot (near-degenerate input, or magnitudes where the error analysis does not hold) the
-// determinant is recomputed with GMP rationals, which are exact for double inputs.
+// Exact predicates in three stages:
+//  1. a semi-static floating-point filter decides almost every call with a nonzero result;
+//  2. when it cannot (zero or nearly zero determinants: coplanar neighbours, shared points),
+//     the determinant is evaluated exactly with floating-point expansions (Shewchuk 1997) on
+//     the stack. Mesh checks hit this stage often (every pair of coplanar neighbouring faces
+//     has an exactly zero determinant, which no filter can certify), so it must not allocate;
+//  3. inputs whose magnitudes would make expansion products underflow or overflow go to GMP
+//     rationals, which are exact for any double.
 // Triangle–triangle tests are built only from orient3d/orient2d and exact coordinate
 // comparisons, never from constructed points, so their answers are exact as well.
 #include "s2c/core/predicates.h"
@@ -9,6 +14,12 @@
 #include <cmath>
 
 #include <gmpxx.h>
+
+// The error bounds and two_sum/two_product rely on IEEE round-to-nearest arithmetic evaluated
+// exactly as written; value-changing optimisations would silently break exactness.
+#if defined(__FAST_MATH__)
+#error "predicates.cpp must not be compiled with -ffast-math"
+#endif
 
 namespace s2c {
 namespace {
@@ -37,7 +48,7 @@ constexpr double kOrient2dBound = 9.0 * kU;
 constexpr double kOrient3dMin = 1e-97, kOrient3dMax = 1e102;
 constexpr double kOrient2dMin = 1e-146, kOrient2dMax = 1e153;
 
-int orient3d_exact(const V3& a, const V3& b, const V3& c, const V3& d) {
+int orient3d_gmp(const V3& a, const V3& b, const V3& c, const V3& d) {
   // mpq_class(double) is exact, and so is every operation below.
   const mpq_class ax(a.x()), ay(a.y()), az(a.z());
   const mpq_class bx = mpq_class(b.x()) - ax, by = mpq_class(b.y()) - ay, bz = mpq_class(b.z()) - az;
@@ -47,12 +58,140 @@ int orient3d_exact(const V3& a, const V3& b, const V3& c, const V3& d) {
   return sgn(det);
 }
 
-int orient2d_exact(const V2& a, const V2& b, const V2& c) {
+int orient2d_gmp(const V2& a, const V2& b, const V2& c) {
   const mpq_class ax(a.x()), ay(a.y());
   const mpq_class bx = mpq_class(b.x()) - ax, by = mpq_class(b.y()) - ay;
   const mpq_class cx = mpq_class(c.x()) - ax, cy = mpq_class(c.y()) - ay;
   const mpq_class det = bx * cy - by * cx;
   return sgn(det);
+}
+
+// ---- stage 2: floating-point expansions -------------------------------------------------
+// An expansion is a sum of doubles with nonoverlapping bits, stored by increasing magnitude
+// without zeros; its sign is the sign of its last (largest) component. two_sum and
+// two_product (with a fused multiply-add) return the exact result as value + error, so every
+// operation below is exact as long as no product underflows or overflows. The callers
+// guarantee that with a range check: all coordinates are 0 or have |x| in [2^-306, 2^300]
+// for orient3d, so every coordinate is a multiple of 2^-358 and a product of three
+// differences is a multiple of 2^-1074 (the smallest subnormal) and below 2^906;
+// for orient2d [2^-484, 2^500] gives multiples of 2^-536 and products of two below 2^1004.
+
+constexpr int kExpansionCapacity = 192;  // det of orient3d: 3 * (2 * 2 * (2*2 + 2*2)) * 2 comps
+struct Expansion {
+  int n = 0;
+  double c[kExpansionCapacity];
+  void push(double x) {
+    if (x != 0) c[n++] = x;
+  }
+  int sign() const { return n == 0 ? 0 : (c[n - 1] > 0 ? 1 : -1); }
+};
+
+inline void two_sum(double a, double b, double& x, double& y) {
+  x = a + b;
+  const double bv = x - a, av = x - bv;
+  y = (a - av) + (b - bv);
+}
+
+inline void two_product(double a, double b, double& x, double& y) {
+  x = a * b;
+  y = std::fma(a, b, -x);
+}
+
+// Exact a - b as an expansion of at most two components.
+Expansion difference(double a, double b) {
+  double x, y;
+  two_sum(a, -b, x, y);
+  Expansion e;
+  e.push(y);
+  e.push(x);
+  return e;
+}
+
+// e += b (Shewchuk's Grow-Expansion with zero elimination).
+void grow(Expansion& e, double b) {
+  double q = b;
+  int k = 0;
+  for (int i = 0; i < e.n; ++i) {
+    double s, h;
+    two_sum(q, e.c[i], s, h);
+    q = s;
+    if (h != 0) e.c[k++] = h;
+  }
+  if (q != 0) e.c[k++] = q;
+  e.n = k;
+}
+
+// e += sign * f.
+void add(Expansion& e, const Expansion& f, double sign = 1.0) {
+  for (int i = 0; i < f.n; ++i) grow(e, sign * f.c[i]);
+}
+
+// e * b (Shewchuk's Scale-Expansion with zero elimination).
+Expansion scale(const Expansion& e, double b) {
+  Expansion h;
+  if (e.n == 0 || b == 0) return h;
+  double q, hh;
+  two_product(e.c[0], b, q, hh);
+  h.push(hh);
+  for (int i = 1; i < e.n; ++i) {
+    double p1, p0, s;
+    two_product(e.c[i], b, p1, p0);
+    two_sum(q, p0, s, hh);
+    h.push(hh);
+    two_sum(p1, s, q, hh);
+    h.push(hh);
+  }
+  h.push(q);
+  return h;
+}
+
+// e * f, f short (the components of f scale e one at a time).
+Expansion multiply(const Expansion& e, const Expansion& f) {
+  Expansion r;
+  for (int j = 0; j < f.n; ++j) add(r, scale(e, f.c[j]));
+  return r;
+}
+
+bool expansion_range(double x, double lo, double hi) {
+  const double m = std::abs(x);
+  return m == 0 || (m >= lo && m <= hi);
+}
+
+bool orient3d_expansion_ok(const V3& a, const V3& b, const V3& c, const V3& d) {
+  for (const V3* p : {&a, &b, &c, &d})
+    for (int k = 0; k < 3; ++k)
+      if (!expansion_range((*p)[k], 0x1p-306, 0x1p300)) return false;
+  return true;
+}
+
+int orient3d_expansion(const V3& a, const V3& b, const V3& c, const V3& d) {
+  const Expansion bx = difference(b.x(), a.x()), by = difference(b.y(), a.y()), bz = difference(b.z(), a.z());
+  const Expansion cx = difference(c.x(), a.x()), cy = difference(c.y(), a.y()), cz = difference(c.z(), a.z());
+  const Expansion dx = difference(d.x(), a.x()), dy = difference(d.y(), a.y()), dz = difference(d.z(), a.z());
+  auto minor = [](const Expansion& p, const Expansion& q, const Expansion& r, const Expansion& s) {
+    Expansion m = multiply(p, q);  // p*q - r*s
+    add(m, multiply(r, s), -1.0);
+    return m;
+  };
+  Expansion det = multiply(minor(cy, dz, cz, dy), bx);
+  add(det, multiply(minor(cz, dx, cx, dz), by));
+  add(det, multiply(minor(cx, dy, cy, dx), bz));
+  return det.sign();
+}
+
+bool orient2d_expansion_ok(const V2& a, const V2& b, const V2& c) {
+  for (const V2* p : {&a, &b, &c})
+    for (int k = 0; k < 2; ++k)
+      if (!expansion_range((*p)[k], 0x1p-484, 0x1p500)) return false;
+  return true;
+}
+
+int orient2d_expansion(const V2& a, const V2& b, const V2& c) {
+  const Expansion bx = difference(b.x(), a.x()), by = difference(b.y(), a.y());
+  const Expansion cx = difference(c.x(), a.x()), cy = difference(c.y(), a.y());
+  Expansion det = multiply(bx, cy);
+  add(det, multiply(by, cx), -1.0);
+  return det.sign();
 }
 
 // ---- small exact helpers ---------------------------------------------------------------
@@ -330,7 +469,8 @@ int orient3d(const V3& a, const V3& b, const V3& c, const V3& d) {
     if (det > eps) return 1;
     if (det < -eps) return -1;
   }
-  return orient3d_exact(a, b, c, d);
+  if (orient3d_expansion_ok(a, b, c, d)) return orient3d_expansion(a, b, c, d);
+  return orient3d_gmp(a, b, c, d);
 }
 
 int orient2d(const V2& a, const V2& b, const V2& c) {
@@ -345,7 +485,8 @@ int orient2d(const V2& a, const V2& b, const V2& c) {
     if (det > eps) return 1;
     if (det < -eps) return -1;
   }
-  return orient2d_exact(a, b, c);
+  if (orient2d_expansion_ok(a, b, c)) return orient2d_expansion(a, b, c);
+  return orient2d_gmp(a, b, c);
 }
 
 bool triangles_intersect(const Tri& t, const Tri& u) {

@@ -4,9 +4,11 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <string>
 
+#include "s2c/core/errors.h"
 #include "s2c/core/mesh.h"
 
 namespace s2c::test {
@@ -51,6 +53,16 @@ inline TriangleSoup cube(double size = 10.0) {
   TriangleSoup s;
   add_cube(s, Eigen::Vector3d::Zero(), size);
   return s;
+}
+
+/// Expects `f` to throw InvalidInput whose message contains every string of `parts`.
+inline void expect_invalid_input(const std::function<void()>& f, std::initializer_list<std::string> parts) {
+  try {
+    f();
+    ADD_FAILURE() << "expected InvalidInput containing '" << *parts.begin() << "'";
+  } catch (const InvalidInput& e) {
+    for (const auto& part : parts) EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+  }
 }
 
 /// Icosphere: subdivided icosahedron projected to the sphere (outward).

@@ -1,7 +1,7 @@
 // cgal_check: an independent checker for triangle meshes, built only on CGAL (no scan2cad code),
 // used to cross-check `scan2cad check` and the exact predicates in core/predicates.
 //
-//   cgal_check MESH                        one JSON object on stdout (see print_json below)
+//   cgal_check MESH                        one JSON object on stdout (keys below, plus timings)
 //   cgal_check --random-tri-tri N SEED     N lines "18 coordinates result" (CGAL's answer, 0/1)
 //   cgal_check --random-face-pairs N SEED  N lines "18 coordinates, 6 indices, result"
 //
@@ -21,9 +21,12 @@
 //                         are linked when they have a common edge incident to v (whatever the
 //                         number of faces on that edge); v counts when the links leave more
 //                         than one group. Through a non-manifold edge all its faces are linked,
-//                         so a vertex is not counted merely for lying on one (the manifest's
-//                         convention; see the report of the tool's author)
+//                         so a vertex is not counted merely for lying on one. This reproduces
+//                         non_manifold_vertices of ../shared/data/real/manifest.json on every
+//                         mesh there; the stricter variant (links only through edges used by
+//                         exactly two faces) is printed as nonmanifold_vertices_strict
 //   components            connected components of faces linked by shared vertices
+//                         (unreferenced vertices form no component)
 //   closed                boundary_edges == 0 and nonmanifold_edges == 0
 //   degenerate_faces      faces whose three points are collinear (CGAL::collinear, exact);
 //                         includes faces with a repeated index
@@ -36,7 +39,8 @@
 //                         skips them and reports (f,f) instead): they are tested as the point or
 //                         segment they are, and a pair counts when the two point sets meet
 //                         outside the hull of the shared vertices (computed with EPECK
-//                         constructions, see intersects_outside_hull).
+//                         constructions, see intersects_outside_hull). Candidate pairs come
+//                         from CGAL::box_self_intersection_d on closed face bounding boxes.
 //   self_intersections_nondegenerate  the same, counting only pairs of non-degenerate faces
 //   cgal_pmp_self_intersections       size of PMP::self_intersections' output on a
 //                         Surface_mesh (only when the soup is a valid polygon mesh, else null);
@@ -44,7 +48,6 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
-#include <cinttypes>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -54,7 +57,6 @@
 #include <numeric>
 #include <random>
 #include <set>
-#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -388,6 +390,21 @@ PairResult face_pair_intersect(const std::array<Point, 3>& p, const std::array<s
 
 std::string json_count(std::size_t n) { return std::to_string(n); }
 
+std::string json_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", c);
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
 int check_mesh(const std::string& path) {
   const auto t0 = std::chrono::steady_clock::now();
   const Soup soup = read_mesh(path);
@@ -455,7 +472,7 @@ int check_mesh(const std::string& path) {
       "\"candidate_pairs\": %zu, \"is_polygon_mesh\": %s, \"cgal_pmp_self_intersections\": %s, "
       "\"seconds\": {\"read\": %.3f, \"topology\": %.3f, \"self_intersections\": %.3f, \"pmp\": %.3f, "
       "\"total\": %.3f}}\n",
-      path.c_str(), topo.points, topo.vertices, topo.points - topo.vertices, topo.faces, topo.edges,
+      json_escape(path).c_str(), topo.points, topo.vertices, topo.points - topo.vertices, topo.faces, topo.edges,
       topo.boundary_edges, topo.boundary_loops, topo.nonmanifold_edges, topo.nonmanifold_vertices,
       topo.nonmanifold_vertices_strict, topo.components,
       (topo.boundary_edges == 0 && topo.nonmanifold_edges == 0) ? "true" : "false", degenerate, pairs,
@@ -608,7 +625,8 @@ int random_face_pairs(long n, std::uint64_t seed) {
     random_pair(r, p, q);
     // Indices 0..2 for p; q shares 0..3 of them, the others get 3..5. Shared indices take
     // p's positions, so index -> position stays a function.
-    const int shared = r.chance(0.15) ? 0 : r.integer(1, 3) == 3 && r.chance(0.3) ? 3 : r.integer(1, 2);
+    int shared = 0;  // about 15 % none, 8 % all three, the rest one or two
+    if (!r.chance(0.15)) shared = (r.integer(1, 3) == 3 && r.chance(0.3)) ? 3 : r.integer(1, 2);
     std::array<std::size_t, 3> pi{0, 1, 2}, qi{3, 4, 5};
     std::array<int, 3> order{0, 1, 2};
     std::shuffle(order.begin(), order.end(), r.gen);

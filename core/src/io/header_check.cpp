@@ -130,10 +130,10 @@ DeclaredCounts check_ply(const fs::path& p, std::uintmax_t size) {
   if (!out.binary) {
     std::uint64_t records = 0;
     for (const Element& e : elements) records += e.count;
-    const std::uint64_t lines = data_lines(p, body_start);
-    if (lines < records)
+    const std::uint64_t found = data_lines(p, body_start);
+    if (found < records)
       fail(p, fmt::format("truncated: the header declares {} records (vertices, faces, ...) but only {} data lines follow",
-                          records, lines));
+                          records, found));
   }
   return out;
 }

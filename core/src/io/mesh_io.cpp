@@ -74,6 +74,7 @@ TriangleSoup read_soup(const fs::path& path, bool allow_empty) {
                                    importer.first_error.empty() ? "malformed file (the reader rejected it)" : importer.first_error));
   if (!importer.first_error.empty()) throw InvalidInput(fmt::format("{}: {}", path.string(), importer.first_error));
   TriangleSoup soup = std::move(importer.soup);
+  io_detail::refine_coordinates(path, format, soup);
   if (!soup.normals.empty()) soup.normals.resize(soup.vertices.size(), Eigen::Vector3d::Zero());
   validate_soup(path, soup, declared, importer.face_records, allow_empty);
   return soup;

@@ -1,13 +1,15 @@
 // Tests for core/predicates.h: exactness of orient2d/orient3d, triangle–triangle cases that
 // defeat floating point, the shared-vertex rules of faces_self_intersect, and agreement with
-// CGAL on pairs recorded by tools/cgal_check (tests/data/*_cgal.txt).
+// CGAL on pairs recorded by tools/cgal_check (tests/data/*_cgal.txt). Regenerate those with
+//   cgal_check --random-tri-tri 20000 1 > tests/data/tri_tri_cgal.txt
+//   cgal_check --random-face-pairs 5000 2 > tests/data/face_pairs_cgal.txt
+// (the generator is platform-independent, so the files come out byte-identical).
 #include "s2c/core/predicates.h"
 
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <random>
-#include <sstream>
 #include <string>
 #include <vector>
 

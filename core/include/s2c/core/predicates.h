@@ -2,8 +2,15 @@
 /// \file Exact geometric predicates and exact triangle–triangle intersection tests.
 ///
 /// Every function here returns the mathematically correct answer for its double inputs, as if
-/// computed with real numbers: a floating-point evaluation with a semi-static error bound
-/// decides almost every call, and exact rational arithmetic (GMP) decides the rest.
+/// computed with real numbers. Each orientation is decided by the first stage that can:
+///  1. floating point with a semi-static error bound (nonzero, well-conditioned results);
+///  2. exact floating-point expansion arithmetic on the stack, no allocation (zero and
+///     near-zero results, e.g. coplanar neighbouring faces), for coordinates that are 0 or
+///     have magnitudes in [2^-306, 2^300] (orient3d) / [2^-484, 2^500] (orient2d);
+///  3. exact GMP rationals (mpq_class) for the remaining magnitudes.
+/// Measured on the real meshes in ../shared/data (self-intersection candidates): no call
+/// reaches stage 3; 0–31 % of orient3d calls reach stage 2 (median 0.5 %, the most on CAD
+/// meshes with large flat regions), nearly all of them exact zeros.
 /// Inputs must be finite (no NaN, no infinity); any finite double is accepted, including
 /// subnormals and values near the overflow threshold. Coordinates carry no unit of their own
 /// (the project uses millimetres); results do not depend on the unit.
