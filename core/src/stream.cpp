@@ -210,31 +210,24 @@ void write_depth_png(const fs::path& path, const DepthImage& d) {
   out.commit();
 }
 
-std::vector<Eigen::Vector3d> deproject(const Stream& s, std::size_t i, const DepthImage& depth,
-                                       std::vector<Eigen::Vector3d>* view_dirs) {
-  const auto& K = s.info.camera_matrix;
+Deprojector::Deprojector(const StreamInfo& info) : info_(info) {
+  const auto& K = info.camera_matrix;
   const double fx = K(0, 0), fy = K(1, 1), cx = K(0, 2), cy = K(1, 2);
-  const Eigen::Isometry3d T = s.pose_of(i).value_or(Eigen::Isometry3d::Identity());
-  const bool distorted = !s.info.dist_coeffs.isZero();
-  std::vector<Eigen::Vector3d> pts;
-  if (view_dirs) view_dirs->clear();
-  for (int v = 0; v < depth.height; ++v)
-    for (int u = 0; u < depth.width; ++u) {
-      const std::uint16_t raw = depth.at(u, v);
-      if (!raw) continue;
-      const double z = raw * s.info.depth_unit_mm;
-      Eigen::Vector3d pc, origin = Eigen::Vector3d::Zero();
-      if (s.info.sensor == Sensor::laser) {
+  const auto& k = info.dist_coeffs;
+  const bool distorted = !k.isZero();
+  rays_.resize(static_cast<std::size_t>(info.width) * info.height);
+  for (int v = 0; v < info.height; ++v)
+    for (int u = 0; u < info.width; ++u) {
+      Eigen::Vector2d r;
+      if (info.sensor == Sensor::laser) {
         // One profile per row: a fan in the sensor's x-z plane, the sensor advanced along +y.
-        origin = Eigen::Vector3d(0, v * s.info.profile_step_mm, 0);
-        pc = Eigen::Vector3d((u - cx) / fx * z, v * s.info.profile_step_mm, z);
+        r = Eigen::Vector2d((u - cx) / fx, v * info.profile_step_mm);
       } else {
         double x = (u - cx) / fx, y = (v - cy) / fy;
         if (distorted) {
-          // Invert Brown-Conrady distortion by fixed-point iteration (as cv::undistortPoints does).
-          const auto& k = s.info.dist_coeffs;
+          // Invert Brown-Conrady distortion by fixed-point iteration, as cv::undistortPoints does.
           const double x0 = x, y0 = y;
-          for (int it = 0; it < 8; ++it) {
+          for (int it = 0; it < 10; ++it) {
             const double r2 = x * x + y * y;
             const double radial = 1 + k[0] * r2 + k[1] * r2 * r2 + k[4] * r2 * r2 * r2;
             const double dx = 2 * k[2] * x * y + k[3] * (r2 + 2 * x * x);
@@ -243,12 +236,41 @@ std::vector<Eigen::Vector3d> deproject(const Stream& s, std::size_t i, const Dep
             y = (y0 - dy) / radial;
           }
         }
-        pc = Eigen::Vector3d(x * z, y * z, z);
+        r = Eigen::Vector2d(x, y);
       }
-      const Eigen::Vector3d pw = T * pc;
-      pts.push_back(pw);
-      if (view_dirs) view_dirs->push_back((T * origin - pw).normalized());
+      rays_[static_cast<std::size_t>(v) * info.width + u] = r;
     }
+}
+
+std::vector<Eigen::Vector3d> Deprojector::sensor_points(const DepthImage& depth,
+                                                        std::vector<Eigen::Vector3d>* to_sensor) const {
+  std::vector<Eigen::Vector3d> pts;
+  pts.reserve(depth.data.size() / 4);
+  if (to_sensor) to_sensor->clear();
+  const bool laser = info_.sensor == Sensor::laser;
+  const std::size_t n = std::min(depth.data.size(), rays_.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint16_t raw = depth.data[i];
+    if (!raw) continue;
+    const double z = raw * info_.depth_unit_mm;
+    const Eigen::Vector2d& r = rays_[i];
+    const Eigen::Vector3d p = laser ? Eigen::Vector3d(r.x() * z, r.y(), z) : Eigen::Vector3d(r.x() * z, r.y() * z, z);
+    pts.push_back(p);
+    if (to_sensor) {
+      const Eigen::Vector3d origin = laser ? Eigen::Vector3d(0, r.y(), 0) : Eigen::Vector3d::Zero();
+      to_sensor->push_back((origin - p).normalized());
+    }
+  }
+  return pts;
+}
+
+std::vector<Eigen::Vector3d> deproject(const Stream& s, std::size_t i, const DepthImage& depth,
+                                       std::vector<Eigen::Vector3d>* view_dirs) {
+  const Eigen::Isometry3d T = s.pose_of(i).value_or(Eigen::Isometry3d::Identity());
+  std::vector<Eigen::Vector3d> pts = Deprojector(s.info).sensor_points(depth, view_dirs);
+  for (auto& p : pts) p = T * p;
+  if (view_dirs)
+    for (auto& d : *view_dirs) d = T.linear() * d;
   return pts;
 }
 

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cmath>
 #include <fstream>
@@ -12,7 +13,6 @@
 #include <pcl/features/normal_3d_omp.h>
 #include <pcl/filters/statistical_outlier_removal.h>
 #include <pcl/common/common.h>
-#include <pcl/filters/voxel_grid.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
 #include <pcl/kdtree/kdtree_flann.h>
@@ -25,6 +25,7 @@
 #include "s2c/core/files.h"
 #include "s2c/core/progress.h"
 #include "s2c/core/stream.h"
+#include "spacing.h"
 
 namespace fs = std::filesystem;
 
@@ -33,19 +34,13 @@ namespace {
 
 using Cloud = pcl::PointCloud<pcl::PointNormal>;
 
-// Median nearest-neighbour distance over a sample of points: the scan's point spacing.
 double measure_spacing(const Cloud::Ptr& cloud) {
-  pcl::KdTreeFLANN<pcl::PointNormal> tree;
-  tree.setInputCloud(cloud);
-  std::vector<double> d;
-  std::vector<int> idx(2);
-  std::vector<float> sq(2);
-  const std::size_t step = std::max<std::size_t>(1, cloud->size() / 5000);
-  for (std::size_t i = 0; i < cloud->size(); i += step)
-    if (tree.nearestKSearch((*cloud)[i], 2, idx, sq) == 2 && sq[1] > 0) d.push_back(std::sqrt(sq[1]));
-  if (d.empty()) throw InvalidInput("the cloud has no two distinct points");
-  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-  return d[d.size() / 2];
+  std::vector<Eigen::Vector3d> pts;
+  pts.reserve(cloud->size());
+  for (const auto& p : *cloud) pts.emplace_back(p.x, p.y, p.z);
+  const double s = median_spacing(pts);
+  if (!(s > 0)) throw InvalidInput("the cloud has no two distinct points");
+  return s;
 }
 
 // Silences a noisy third-party call (PCL's Poisson prints to stdout/stderr) unless verbose.
@@ -78,74 +73,62 @@ class QuietStdio {
   int saved_out_ = -1, saved_err_ = -1;
 };
 
-Cloud::Ptr load_stream(const fs::path& dir, ReconstructReport& rep) {
-  const Stream s = read_stream(dir);
-  if (s.poses.empty())
-    throw InvalidInput(fmt::format("{}: no poses.txt; registration without poses is not available yet", dir.string()));
-  auto cloud = std::make_shared<Cloud>();
-  Progress progress("frames", s.frames.size());
-  for (std::size_t i = 0; i < s.frames.size(); ++i) {
-    if (!s.pose_of(i))
-      throw InvalidInput(fmt::format("{}: frame {} ({}) has no pose within 20 ms in poses.txt", dir.string(), i,
-                                     s.frames[i].file));
-    std::vector<Eigen::Vector3d> view;
-    const auto pts = deproject(s, i, read_frame(s, i), &view);
-    for (std::size_t k = 0; k < pts.size(); ++k) {
-      pcl::PointNormal p;
-      p.x = static_cast<float>(pts[k].x());
-      p.y = static_cast<float>(pts[k].y());
-      p.z = static_cast<float>(pts[k].z());
-      // The view direction rides in the normal fields until normals are estimated.
-      p.normal_x = static_cast<float>(view[k].x());
-      p.normal_y = static_cast<float>(view[k].y());
-      p.normal_z = static_cast<float>(view[k].z());
-      cloud->push_back(p);
-    }
-    progress.advance();
-    // The spacing of one view is the sensor's sampling; overlapping views would make it look finer.
-    if (i == 0 && cloud->size() > 10) rep.spacing_mm = measure_spacing(cloud);
-  }
-  rep.frames = static_cast<int>(s.frames.size());
+}  // namespace
+
+OrientedCloud fuse_input(const std::vector<fs::path>& inputs, const ReconstructOptions& o, ReconstructReport& rep) {
+  using clock = std::chrono::steady_clock;
+  auto t = clock::now();
+  auto lap = [&t] {
+    const auto now = clock::now();
+    const double s = std::chrono::duration<double>(now - t).count();
+    t = now;
+    return s;
+  };
+  const std::vector<View> views = load_views(inputs, o.input);
+  rep.frames = static_cast<int>(views.size());
+  // The sensor's sampling is the spacing of one view (overlapping views would look finer).
+  std::vector<double> spacings;
+  for (const auto& v : views)
+    if (v.spacing_mm > 0) spacings.push_back(v.spacing_mm);
+  if (spacings.empty()) throw InvalidInput("the input has no two distinct points");
+  std::nth_element(spacings.begin(), spacings.begin() + spacings.size() / 2, spacings.end());
+  rep.spacing_mm = spacings[spacings.size() / 2];
+  rep.load_s = lap();
+  const auto poses = register_views(views, rep.spacing_mm, o.registration, rep.views);
+  rep.register_s = lap();
+  OrientedCloud cloud = fuse_views(views, poses, o, rep);
+  rep.fuse_s = lap();
+  spdlog::debug("load {:.2f} s, register {:.2f} s, fuse {:.2f} s", rep.load_s, rep.register_s, rep.fuse_s);
   return cloud;
 }
 
-Cloud::Ptr load_cloud_file(const fs::path& path) {
-  if (!fs::exists(path)) throw InvalidInput(fmt::format("{}: no such file", path.string()));
-  auto cloud = std::make_shared<Cloud>();
-  pcl::PCLPointCloud2 blob;
-  const std::string ext = path.extension().string();
-  int rc = -1;
-  if (ext == ".pcd") rc = pcl::io::loadPCDFile(path.string(), blob);
-  else if (ext == ".ply") rc = pcl::io::loadPLYFile(path.string(), blob);
-  else throw InvalidInput(fmt::format("{}: a cloud must be .ply or .pcd", path.string()));
-  if (rc < 0) throw InvalidInput(fmt::format("{}: cannot be read as a point cloud", path.string()));
-  pcl::fromPCLPointCloud2(blob, *cloud);
-  // Drop NaN points (organized clouds mark missing pixels that way).
-  Cloud::Ptr finite = std::make_shared<Cloud>();
-  for (const auto& p : *cloud)
-    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) {
-      pcl::PointNormal q = p;
-      // Without a sensor position, orient normals away from the centroid (fixed below).
-      q.normal_x = q.normal_y = q.normal_z = 0;
-      finite->push_back(q);
+OrientedCloud fuse_views(const std::vector<View>& views, const std::vector<Eigen::Isometry3d>& poses,
+                         const ReconstructOptions& o, ReconstructReport& rep) {
+  auto raw = std::make_shared<Cloud>();
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    if (i < rep.views.size() && rep.views[i].rejected) continue;
+    const View& v = views[i];
+    const Eigen::Isometry3d& T = poses[i];
+    for (std::size_t k = 0; k < v.points.size(); ++k) {
+      const Eigen::Vector3d p = T * v.points[k];
+      // The direction to the sensor rides in the normal fields until normals are estimated.
+      const Eigen::Vector3d d = v.to_sensor.empty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(T.linear() * v.to_sensor[k]);
+      pcl::PointNormal q;
+      q.x = static_cast<float>(p.x());
+      q.y = static_cast<float>(p.y());
+      q.z = static_cast<float>(p.z());
+      q.normal_x = static_cast<float>(d.x());
+      q.normal_y = static_cast<float>(d.y());
+      q.normal_z = static_cast<float>(d.z());
+      raw->push_back(q);
     }
-  return finite;
-}
-
-}  // namespace
-
-OrientedCloud fuse_input(const fs::path& input, const ReconstructOptions& o, ReconstructReport& rep) {
-  Cloud::Ptr raw = fs::is_directory(input) ? load_stream(input, rep) : load_cloud_file(input);
+  }
   rep.points_in = raw->size();
-  if (raw->size() < 10) throw InvalidInput(fmt::format("{}: only {} valid points; nothing to reconstruct", input.string(), raw->size()));
+  if (raw->size() < 10) throw InvalidInput(fmt::format("only {} valid points; nothing to reconstruct", raw->size()));
   if (rep.spacing_mm <= 0) rep.spacing_mm = measure_spacing(raw);
   rep.voxel_mm = o.voxel_mm > 0 ? o.voxel_mm : rep.spacing_mm;
 
-  Cloud::Ptr fused = std::make_shared<Cloud>();
-  pcl::VoxelGrid<pcl::PointNormal> grid;
-  grid.setInputCloud(raw);
-  grid.setLeafSize(static_cast<float>(rep.voxel_mm), static_cast<float>(rep.voxel_mm), static_cast<float>(rep.voxel_mm));
-  grid.filter(*fused);
+  Cloud::Ptr fused = std::make_shared<Cloud>(voxel_downsample(*raw, rep.voxel_mm));
   if (o.remove_outliers && fused->size() > 50) {
     Cloud::Ptr kept = std::make_shared<Cloud>();
     pcl::StatisticalOutlierRemoval<pcl::PointNormal> sor;
@@ -205,7 +188,7 @@ Mesh mesh_cloud(const OrientedCloud& in, const ReconstructOptions& o, Reconstruc
   if (o.method == MeshMethod::poisson) {
     // Octree cells about the point spacing, within the range PCL's Poisson handles well.
     rep.poisson_depth = o.poisson_depth > 0 ? o.poisson_depth
-                                            : std::clamp(static_cast<int>(std::ceil(std::log2(diag / (2.0 * spacing)))), 6, 10);
+                                            : std::clamp(static_cast<int>(std::ceil(std::log2(diag / (2.0 * spacing)))), 6, 9);
     pcl::Poisson<pcl::PointNormal> poisson;
     poisson.setDepth(rep.poisson_depth);
     poisson.setInputCloud(cloud);

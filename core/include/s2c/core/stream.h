@@ -63,6 +63,21 @@ Stream read_stream(const std::filesystem::path& dir);
 ///        not 16-bit single channel, or of the wrong size.
 DepthImage read_frame(const Stream& stream, std::size_t i);
 
+/// Back-projection of a sensor's pixels: a ray per pixel computed once (undistorted like
+/// cv::undistortPoints), reused for every frame.
+class Deprojector {
+ public:
+  explicit Deprojector(const StreamInfo& info);
+  /// Points of the valid pixels in the sensor frame (mm), row-major. `to_sensor`, if given,
+  /// receives the unit direction from each point towards where it was seen from.
+  std::vector<Eigen::Vector3d> sensor_points(const DepthImage& depth,
+                                             std::vector<Eigen::Vector3d>* to_sensor = nullptr) const;
+
+ private:
+  StreamInfo info_;
+  std::vector<Eigen::Vector2d> rays_;  // (x/z, y/z) per pixel; laser: (x/z, row offset in mm)
+};
+
 /// Back-projects frame pixels into world coordinates (mm) using the camera matrix, distortion
 /// and the frame's pose (identity without poses). `view_dirs`, if given, receives the unit
 /// direction from each point towards the sensor (for normal orientation).

@@ -6,15 +6,19 @@
 #include <vector>
 
 #include "s2c/core/mesh.h"
+#include "s2c/reconstruct/register.h"
+#include "s2c/reconstruct/views.h"
 
 namespace s2c {
 
 enum class MeshMethod { poisson, gp3 };
 
 struct ReconstructOptions {
+  InputOptions input;
+  RegistrationOptions registration;
   MeshMethod method = MeshMethod::poisson;
   double voxel_mm = 0;        ///< fusion voxel; 0 = the measured point spacing
-  int poisson_depth = 0;      ///< octree depth; 0 = cells of about two point spacings (6..10)
+  int poisson_depth = 0;      ///< octree depth; 0 = cells of about two point spacings (6..9)
   double trim_mm = 0;         ///< drop surface farther than this from the data; 0 = 3 × spacing
   int normal_neighbours = 24; ///< k for normal estimation
   bool remove_outliers = true;
@@ -22,6 +26,8 @@ struct ReconstructOptions {
 
 struct ReconstructReport {
   int frames = 0;
+  std::vector<ViewAlignment> views;  ///< registration residual per view
+  double load_s = 0, register_s = 0, fuse_s = 0;  ///< seconds per step of fuse_input
   std::size_t points_in = 0, points_fused = 0, outliers_removed = 0;
   double spacing_mm = 0, voxel_mm = 0, trim_mm = 0;
   int poisson_depth = 0;
@@ -33,11 +39,16 @@ struct OrientedCloud {
   std::vector<Eigen::Vector3d> points, normals;
 };
 
-/// Reads a stream directory (depth or laser; poses required for now) or a cloud (.ply .pcd) and
-/// fuses it into one cloud with sensor-oriented normals.
-/// \throw InvalidInput naming the file or frame.
-OrientedCloud fuse_input(const std::filesystem::path& input, const ReconstructOptions& options,
+/// Reads the inputs (load_views), registers the views (register_views) and fuses them into one
+/// cloud with sensor-oriented normals.
+/// \throw InvalidInput naming the file or frame; ProcessingError when views do not overlap.
+OrientedCloud fuse_input(const std::vector<std::filesystem::path>& inputs, const ReconstructOptions& options,
                          ReconstructReport& report);
+
+/// Fuses registered views (rejected ones in `alignment` skipped): voxel grid at the spacing,
+/// statistical outlier removal, normals oriented towards the sensors.
+OrientedCloud fuse_views(const std::vector<View>& views, const std::vector<Eigen::Isometry3d>& poses,
+                         const ReconstructOptions& options, ReconstructReport& report);
 
 /// Meshes a fused cloud; regions without data stay open (holes for repair).
 /// \throw ProcessingError when the mesher produces nothing.

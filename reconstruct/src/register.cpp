@@ -1,0 +1,338 @@
+#include "s2c/reconstruct/register.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+
+#include <fmt/format.h>
+#include <Eigen/Geometry>
+#include <pcl/common/transforms.h>
+#include <pcl/features/fpfh_omp.h>
+#include <pcl/features/normal_3d_omp.h>
+#include <pcl/kdtree/kdtree_flann.h>
+#include <pcl/point_types.h>
+#include <pcl/registration/icp.h>
+#include <pcl/registration/sample_consensus_prerejective.h>
+#include <spdlog/spdlog.h>
+
+#include "s2c/core/errors.h"
+#include "s2c/core/progress.h"
+#include "spacing.h"
+
+namespace s2c {
+namespace {
+
+using PN = pcl::PointNormal;
+using CloudPN = pcl::PointCloud<PN>;
+constexpr std::size_t kMaxRegistrationPoints = 15000;
+
+// A view downsampled to `voxel` with normals oriented towards its sensor, in the sensor frame.
+// The direction to the sensor rides in the normal fields through the voxel grid (which
+// averages every field), then decides each estimated normal's sign.
+CloudPN::Ptr prepare(const View& v, double voxel) {
+  auto raw = std::make_shared<CloudPN>();
+  raw->reserve(v.points.size());
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& p : v.points) centroid += p;
+  centroid /= static_cast<double>(std::max<std::size_t>(1, v.points.size()));
+  for (std::size_t i = 0; i < v.points.size(); ++i) {
+    PN q;
+    q.x = static_cast<float>(v.points[i].x());
+    q.y = static_cast<float>(v.points[i].y());
+    q.z = static_cast<float>(v.points[i].z());
+    // Unknown sensor (plain clouds): face away from the view's centroid.
+    const Eigen::Vector3d d = v.to_sensor.empty() ? Eigen::Vector3d(v.points[i] - centroid) : v.to_sensor[i];
+    q.normal_x = static_cast<float>(d.x());
+    q.normal_y = static_cast<float>(d.y());
+    q.normal_z = static_cast<float>(d.z());
+    raw->push_back(q);
+  }
+  auto down = std::make_shared<CloudPN>(voxel_downsample(*raw, voxel));
+  // Six unknowns need a few thousand well-spread points, not a room's worth: coarsen the grid
+  // (not a stride, which would thin the density that overlap tests rely on).
+  for (double v = voxel; down->size() > kMaxRegistrationPoints;) {
+    v *= std::sqrt(static_cast<double>(down->size()) / kMaxRegistrationPoints);
+    *down = voxel_downsample(*raw, v);
+  }
+  pcl::NormalEstimationOMP<PN, pcl::Normal> ne(2);
+  ne.setInputCloud(down);
+  ne.setKSearch(16);
+  pcl::PointCloud<pcl::Normal> normals;
+  ne.compute(normals);
+  auto out = std::make_shared<CloudPN>();
+  for (std::size_t i = 0; i < down->size(); ++i) {
+    Eigen::Vector3f n(normals[i].normal_x, normals[i].normal_y, normals[i].normal_z);
+    if (!n.allFinite()) continue;
+    PN q = (*down)[i];
+    const Eigen::Vector3f dir(q.normal_x, q.normal_y, q.normal_z);
+    if (n.dot(dir) < 0) n = -n;
+    q.normal_x = n.x();
+    q.normal_y = n.y();
+    q.normal_z = n.z();
+    q.curvature = normals[i].curvature;
+    out->push_back(q);
+  }
+  return out;
+}
+
+CloudPN::Ptr union_of(const std::vector<CloudPN::Ptr>& clouds, const std::vector<Eigen::Isometry3d>& poses,
+                      const std::vector<int>& which) {
+  auto out = std::make_shared<CloudPN>();
+  for (int j : which) {
+    CloudPN t;
+    pcl::transformPointCloudWithNormals(*clouds[j], t, poses[j].matrix().cast<float>());
+    *out += t;
+  }
+  return out;
+}
+
+struct Fit {
+  double rms = 0, overlap = 0;
+};
+
+// Residual of a placed view against a target: share of its points with a partner within
+// `radius`, and the point-to-plane RMS over those.
+Fit evaluate(const CloudPN& source, const Eigen::Isometry3d& pose, const CloudPN::Ptr& target, double radius) {
+  Fit f;
+  if (source.empty() || target->empty()) return f;
+  pcl::KdTreeFLANN<PN> tree;
+  tree.setInputCloud(target);
+  std::vector<int> idx(1);
+  std::vector<float> sq(1);
+  double sum = 0;
+  std::size_t hits = 0;
+  const Eigen::Matrix4f T = pose.matrix().cast<float>();
+  for (const auto& p : source) {
+    PN q;
+    q.getVector4fMap() = T * Eigen::Vector4f(p.x, p.y, p.z, 1);
+    if (tree.nearestKSearch(q, 1, idx, sq) != 1 || sq[0] > radius * radius) continue;
+    const PN& t = (*target)[idx[0]];
+    const double d = (q.getVector3fMap() - t.getVector3fMap()).dot(t.getNormalVector3fMap());
+    sum += d * d;
+    ++hits;
+  }
+  f.overlap = static_cast<double>(hits) / static_cast<double>(source.size());
+  f.rms = hits ? std::sqrt(sum / static_cast<double>(hits)) : 0;
+  return f;
+}
+
+// Symmetric point-to-plane ICP, coarse to fine: correspondence radii shrink to `finest` × spacing.
+Eigen::Isometry3d icp_refine(const CloudPN::Ptr& source, const CloudPN::Ptr& target, const Eigen::Isometry3d& init,
+                             double spacing, const std::vector<double>& radii) {
+  pcl::IterativeClosestPointWithNormals<PN, PN> icp;
+  icp.setUseSymmetricObjective(true);
+  icp.setEnforceSameDirectionNormals(true);
+  icp.setInputSource(source);
+  icp.setInputTarget(target);
+  Eigen::Matrix4f guess = init.matrix().cast<float>();
+  for (double f : radii) {
+    icp.setMaxCorrespondenceDistance(f * spacing);
+    icp.setMaximumIterations(20);
+    icp.setTransformationEpsilon(1e-10);
+    icp.setEuclideanFitnessEpsilon(1e-12);
+    CloudPN aligned;
+    icp.align(aligned, guess);
+    if (icp.hasConverged()) guess = icp.getFinalTransformation();
+  }
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.matrix() = guess.cast<double>();
+  // Re-orthonormalise: float accumulation leaves the rotation slightly off.
+  out.linear() = Eigen::Quaterniond(out.rotation()).normalized().toRotationMatrix();
+  return out;
+}
+
+// FPFH + SampleConsensusPrerejective: a pose for `source` (sensor frame) on `target` (world).
+std::optional<Eigen::Isometry3d> global_align(const CloudPN::Ptr& source, const CloudPN::Ptr& target, double voxel) {
+  using Features = pcl::PointCloud<pcl::FPFHSignature33>;
+  auto features = [&](const CloudPN::Ptr& c) {
+    auto f = std::make_shared<Features>();
+    pcl::FPFHEstimationOMP<PN, PN, pcl::FPFHSignature33> est(2);
+    est.setInputCloud(c);
+    est.setInputNormals(c);
+    est.setRadiusSearch(5.0 * voxel);
+    est.compute(*f);
+    return f;
+  };
+  const auto fs = features(source), ft = features(target);
+  pcl::SampleConsensusPrerejective<PN, PN, pcl::FPFHSignature33> ransac;
+  ransac.setInputSource(source);
+  ransac.setSourceFeatures(fs);
+  ransac.setInputTarget(target);
+  ransac.setTargetFeatures(ft);
+  ransac.setMaximumIterations(20000);
+  ransac.setNumberOfSamples(3);
+  ransac.setCorrespondenceRandomness(5);
+  ransac.setSimilarityThreshold(0.9f);
+  ransac.setMaxCorrespondenceDistance(static_cast<float>(2.5 * voxel));
+  ransac.setInlierFraction(0.2f);
+  std::srand(1);  // PCL's sampler uses rand(): same input, same result
+  CloudPN aligned;
+  ransac.align(aligned);
+  if (!ransac.hasConverged()) return std::nullopt;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.matrix() = ransac.getFinalTransformation().cast<double>();
+  return T;
+}
+
+double angle_deg(const Eigen::Matrix3d& R) {
+  return Eigen::AngleAxisd(R).angle() * 180.0 / M_PI;
+}
+
+// The `k` other placed views whose sensors are nearest to view i's.
+std::vector<int> neighbours_of(int i, const std::vector<Eigen::Isometry3d>& poses, const std::vector<char>& placed, int k) {
+  std::vector<std::pair<double, int>> d;
+  for (int j = 0; j < static_cast<int>(poses.size()); ++j)
+    if (j != i && placed[j]) d.emplace_back((poses[j].translation() - poses[i].translation()).norm(), j);
+  std::sort(d.begin(), d.end());
+  std::vector<int> out;
+  for (int m = 0; m < std::min<int>(k, static_cast<int>(d.size())); ++m) out.push_back(d[m].second);
+  return out;
+}
+
+}  // namespace
+
+std::vector<Eigen::Isometry3d> register_views(const std::vector<View>& views, double spacing,
+                                              const RegistrationOptions& o, std::vector<ViewAlignment>& report) {
+  const int n = static_cast<int>(views.size());
+  report.assign(n, {});
+  std::vector<Eigen::Isometry3d> poses(n, Eigen::Isometry3d::Identity());
+  const bool have_poses = std::all_of(views.begin(), views.end(), [](const View& v) { return v.pose.has_value(); });
+  for (int i = 0; i < n; ++i) {
+    report[i].name = views[i].name;
+    if (views[i].pose) poses[i] = *views[i].pose;
+  }
+  RegistrationMode mode = o.mode;
+  if (mode == RegistrationMode::automatic) mode = have_poses ? RegistrationMode::refine : RegistrationMode::global;
+  if (mode == RegistrationMode::refine && !have_poses)
+    throw InvalidInput("--register refine needs recorded poses for every view (poses.txt)");
+  if (n < 2 || mode == RegistrationMode::off) {
+    if (!have_poses && n > 1)
+      throw InvalidInput("several views without poses cannot be fused unregistered; use --register global");
+    return poses;
+  }
+  if (!(spacing > 0)) throw ProcessingError("cannot register: the point spacing is zero");
+
+  // Registration works on a coarser copy of each view: plenty of constraints for six unknowns,
+  // and a fraction of the cost.
+  const double voxel = 3.0 * spacing;
+  const std::vector<double> radii = {12.0, 6.0, 3.0};
+  std::vector<CloudPN::Ptr> fine(n);
+  for (int i = 0; i < n; ++i) fine[i] = prepare(views[i], voxel);
+  std::vector<char> placed(n, 0);
+  spdlog::debug("registration: {} views, {} points each after thinning (voxel {:.3f} mm)", n, fine[0]->size(), voxel);
+
+  if (mode == RegistrationMode::global) {
+    // Place view 0, then each next view against everything placed so far.
+    const double gvoxel = 2.5 * voxel;
+    std::vector<CloudPN::Ptr> coarse(n);
+    for (int i = 0; i < n; ++i) coarse[i] = prepare(views[i], gvoxel);
+    placed[0] = 1;
+    Progress progress("global", n - 1);
+    for (int i = 1; i < n; ++i) {
+      std::vector<int> done;
+      for (int j = 0; j < n; ++j)
+        if (placed[j]) done.push_back(j);
+      const auto target_fine = union_of(fine, poses, done);
+      progress.advance();
+      // A sequence moves little between frames: try starting from the previous placed view's
+      // pose; only a clear fit is taken, anything else goes to the global search.
+      const Eigen::Isometry3d T_seq = icp_refine(fine[i], target_fine, poses[done.back()], spacing, radii);
+      const Fit seq_fit = evaluate(*fine[i], T_seq, target_fine, voxel);
+      spdlog::debug("view {}: from the previous pose overlap {:.2f}, rms {:.3f} mm", i, seq_fit.overlap, seq_fit.rms);
+      if (seq_fit.overlap >= 0.5 && seq_fit.rms <= 2.0 * spacing) {
+        poses[i] = T_seq;
+        placed[i] = 1;
+        continue;
+      }
+      const auto T0 = global_align(coarse[i], union_of(coarse, poses, done), gvoxel);
+      if (!T0) {
+        report[i].rejected = true;
+        report[i].reason = "no global alignment found (too little overlap or too few distinct features)";
+        continue;
+      }
+      const Eigen::Isometry3d T = icp_refine(fine[i], target_fine, *T0, spacing, radii);
+      const Fit fit = evaluate(*fine[i], T, target_fine, voxel);
+      if (fit.overlap < o.min_overlap) {
+        report[i].rejected = true;
+        report[i].reason = fmt::format("aligns with only {:.0f}% of its points", 100 * fit.overlap);
+        continue;
+      }
+      poses[i] = T;
+      placed[i] = 1;
+    }
+  } else {
+    std::fill(placed.begin(), placed.end(), 1);
+  }
+
+  // Multi-view refinement: every view against its nearest neighbours, a few passes, so that
+  // no view carries the error of a chain. In global mode view 0 stays put to fix the frame.
+  const int rounds = o.rounds;
+  Progress progress("refine", static_cast<std::size_t>(rounds) * n);
+  for (int round = 0; round < rounds; ++round)
+    for (int i = 0; i < n; ++i) {
+      progress.advance();
+      if (!placed[i] || (mode == RegistrationMode::global && i == 0)) continue;
+      const auto nb = neighbours_of(i, poses, placed, o.neighbours);
+      if (nb.empty()) continue;
+      const Eigen::Isometry3d T = icp_refine(fine[i], union_of(fine, poses, nb), poses[i], spacing, radii);
+      if (views[i].pose) {
+        const Eigen::Isometry3d delta = views[i].pose->inverse() * T;
+        if (angle_deg(delta.rotation()) > o.max_correction_deg) {
+          report[i].reason = "refinement moved the recorded pose too far; kept the recorded pose";
+          continue;
+        }
+      }
+      poses[i] = T;
+    }
+
+  // Refining every view leaves the set free to drift as a whole. Recorded poses define the
+  // frame (the turntable's, the part's): put the refined set back where the recording had it,
+  // by the rigid motion that best maps refined onto recorded sample points of every view.
+  if (mode == RegistrationMode::refine) {
+    Eigen::Matrix3Xd from(3, 0), to(3, 0);
+    for (int i = 0; i < n; ++i) {
+      if (!placed[i]) continue;
+      const std::size_t step = std::max<std::size_t>(1, fine[i]->size() / 200);
+      for (std::size_t k = 0; k < fine[i]->size(); k += step) {
+        const Eigen::Vector3d p = (*fine[i])[k].getVector3fMap().cast<double>();
+        from.conservativeResize(3, from.cols() + 1);
+        to.conservativeResize(3, to.cols() + 1);
+        from.col(from.cols() - 1) = poses[i] * p;
+        to.col(to.cols() - 1) = *views[i].pose * p;
+      }
+    }
+    if (from.cols() >= 3) {
+      Eigen::Isometry3d C = Eigen::Isometry3d::Identity();
+      C.matrix() = Eigen::umeyama(from, to, false);
+      for (auto& P : poses) P = C * P;
+    }
+  }
+
+  // Final residuals and rejection of views that do not fit with the others.
+  int kept = 0;
+  for (int i = 0; i < n; ++i) {
+    if (!placed[i]) continue;
+    const auto nb = neighbours_of(i, poses, placed, o.neighbours);
+    const Fit fit = nb.empty() ? Fit{} : evaluate(*fine[i], poses[i], union_of(fine, poses, nb), voxel);
+    report[i].rms_mm = fit.rms;
+    report[i].overlap = fit.overlap;
+    if (views[i].pose) {
+      const Eigen::Isometry3d delta = views[i].pose->inverse() * poses[i];
+      report[i].corrected_mm = delta.translation().norm();
+      report[i].corrected_deg = angle_deg(delta.rotation());
+    }
+    if (!nb.empty() && fit.overlap < o.min_overlap) {
+      report[i].rejected = true;
+      report[i].reason = fmt::format("overlaps the other views with only {:.0f}% of its points", 100 * fit.overlap);
+      continue;
+    }
+    ++kept;
+  }
+  for (const auto& r : report)
+    if (r.rejected) spdlog::warn("view {} rejected: {}", r.name, r.reason);
+  if (kept < 1 || (n > 1 && kept < 2))
+    throw ProcessingError(fmt::format("registration failed: the {} views do not overlap (see the warnings above)", n));
+  return poses;
+}
+
+}  // namespace s2c

@@ -1,0 +1,76 @@
+#include "spacing.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <pcl/kdtree/kdtree_flann.h>
+#include <pcl/point_types.h>
+
+namespace s2c {
+
+double median_spacing(const std::vector<Eigen::Vector3d>& points) {
+  if (points.size() < 2) return 0;
+  auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+  cloud->reserve(points.size());
+  for (const auto& p : points) cloud->emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+  tree.setInputCloud(cloud);
+  std::vector<double> d;
+  std::vector<int> idx(2);
+  std::vector<float> sq(2);
+  const std::size_t step = std::max<std::size_t>(1, cloud->size() / 4000);
+  for (std::size_t i = 0; i < cloud->size(); i += step)
+    if (tree.nearestKSearch((*cloud)[i], 2, idx, sq) == 2 && sq[1] > 0) d.push_back(std::sqrt(sq[1]));
+  if (d.empty()) return 0;
+  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+  return d[d.size() / 2];
+}
+
+}  // namespace s2c
+
+#include <unordered_map>
+
+namespace s2c {
+
+pcl::PointCloud<pcl::PointNormal> voxel_downsample(const pcl::PointCloud<pcl::PointNormal>& in, double voxel) {
+  struct Acc {
+    Eigen::Vector3d p = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::Zero();
+    double curvature = 0;
+    int count = 0;
+  };
+  std::unordered_map<std::uint64_t, Acc> cells;
+  cells.reserve(in.size() / 2 + 1);
+  std::vector<std::uint64_t> order;  // first-seen order keeps the output deterministic
+  const double inv = 1.0 / voxel;
+  for (const auto& q : in) {
+    if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z)) continue;
+    // 21 bits per axis around the origin: ±10^6 voxels, far beyond any scan here.
+    auto key = [&](float c) { return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(c * inv)) + (1 << 20)) & 0x1fffff; };
+    const std::uint64_t k = key(q.x) | (key(q.y) << 21) | (key(q.z) << 42);
+    auto [it, fresh] = cells.try_emplace(k);
+    if (fresh) order.push_back(k);
+    Acc& a = it->second;
+    a.p += Eigen::Vector3d(q.x, q.y, q.z);
+    a.n += Eigen::Vector3d(q.normal_x, q.normal_y, q.normal_z);
+    a.curvature += q.curvature;
+    ++a.count;
+  }
+  pcl::PointCloud<pcl::PointNormal> out;
+  out.reserve(order.size());
+  for (std::uint64_t k : order) {
+    const Acc& a = cells[k];
+    pcl::PointNormal q;
+    const Eigen::Vector3d p = a.p / a.count, n = a.n / a.count;
+    q.x = static_cast<float>(p.x());
+    q.y = static_cast<float>(p.y());
+    q.z = static_cast<float>(p.z());
+    q.normal_x = static_cast<float>(n.x());
+    q.normal_y = static_cast<float>(n.y());
+    q.normal_z = static_cast<float>(n.z());
+    q.curvature = static_cast<float>(a.curvature / a.count);
+    out.push_back(q);
+  }
+  return out;
+}
+
+}  // namespace s2c
