@@ -1,8 +1,8 @@
 #pragma once
 /// \file Registration of the views of a scan into one frame.
-/// With recorded poses: each view is refined against its neighbours (symmetric point-to-plane
-/// ICP, coarse to fine), then all views again against each other so error does not pile up
-/// around a turntable loop. Without poses: FPFH features + SampleConsensusPrerejective give a
+/// With recorded poses: each view is refined against the union of its nearest neighbours
+/// (generalized ICP, coarse to fine), in passes over all views, so the error of one pair is
+/// shared out instead of piling up around a turntable loop. Without poses: FPFH features + SampleConsensusPrerejective give a
 /// global alignment of each view to the views placed so far, refined the same way.
 #include <string>
 #include <vector>
