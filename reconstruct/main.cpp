@@ -29,8 +29,13 @@ int main(int argc, char** argv) {
   app.add_option("INPUT", inputs, "Stream directory, TUM/depth-image folder, or point clouds (.ply .pcd)")->required();
   app.add_option("-o,--output", output, "Mesh to write (.ply .stl .obj .off)")->required();
   app.add_option("--cloud-out", cloud_out, "Also write the fused cloud with normals (.ply)");
-  app.add_option("--method", method, "poisson (watertight where seen) or gp3 (greedy projection)")
-      ->check(CLI::IsMember({"poisson", "gp3"}))->capture_default_str();
+  app.add_option("--method", method,
+                 "poisson (one surface, trimmed to the data), gp3 (greedy projection of the fused cloud), "
+                 "organized (each frame on its pixel grid, concatenated)")
+      ->check(CLI::IsMember({"poisson", "gp3", "organized"}))->capture_default_str();
+  double mls = -1;
+  app.add_option("--mls", mls, "Smooth the fused cloud by moving least squares with this radius, mm "
+                 "(0 = 3 × spacing; default off)")->type_name("MM");
   app.add_option("--voxel", o.voxel_mm, "Fusion voxel size, mm (default: measured point spacing)");
   app.add_option("--depth", o.poisson_depth, "Poisson octree depth (default: from spacing and size)");
   app.add_option("--trim", o.trim_mm, "Drop surface farther than this from the data, mm (default: 3 × spacing)");
@@ -58,23 +63,20 @@ int main(int argc, char** argv) {
                           : registration == "global" ? s2c::RegistrationMode::global
                           : registration == "off"    ? s2c::RegistrationMode::off
                                                      : s2c::RegistrationMode::automatic;
-    o.method = method == "gp3" ? s2c::MeshMethod::gp3 : s2c::MeshMethod::poisson;
+    o.method = method == "gp3" ? s2c::MeshMethod::gp3
+               : method == "organized" ? s2c::MeshMethod::organized : s2c::MeshMethod::poisson;
     s2c::Report report("scan2cad-reconstruct");
     s2c::ReconstructReport r;
-    s2c::OrientedCloud cloud;
-    cloud = s2c::fuse_input(in, o, r);
+    if (app.count("--mls")) o.mls_radius_mm = mls > 0 ? mls : -1;  // -1: from the spacing
+    const s2c::Reconstruction result = s2c::reconstruct(in, o, r);
     report.add_time("load", r.load_s);
     report.add_time("register", r.register_s);
     report.add_time("fuse", r.fuse_s);
-    s2c::Mesh mesh;
-    {
-      s2c::Report::Step t(report, "mesh");
-      mesh = s2c::mesh_cloud(cloud, o, r);
-    }
+    report.add_time("mesh", r.mesh_s);
     {
       s2c::Report::Step t(report, "write");
-      if (!cloud_out.empty()) s2c::write_cloud(cloud, cloud_out);
-      s2c::write_mesh(mesh, output);
+      if (!cloud_out.empty()) s2c::write_cloud(result.cloud, cloud_out);
+      s2c::write_mesh(result.mesh, output);
     }
     nlohmann::json views = nlohmann::json::array();
     for (const auto& v : r.views)
@@ -85,7 +87,7 @@ int main(int argc, char** argv) {
     report.parameters() = {{"input", inputs}, {"output", output}, {"method", method}, {"register", registration},
                            {"voxel_mm", r.voxel_mm},
                            {"poisson_depth", r.poisson_depth}, {"trim_mm", r.trim_mm},
-                           {"normal_neighbours", o.normal_neighbours}};
+                           {"normal_neighbours", o.normal_neighbours}, {"mls_radius_mm", r.mls_radius_mm}};
     report.counts() = {{"frames", r.frames}, {"points_in", r.points_in}, {"points_fused", r.points_fused},
                        {"outliers_removed", r.outliers_removed}, {"spacing_mm", r.spacing_mm},
                        {"faces_before_trim", r.faces_before_trim}, {"faces", r.faces}, {"vertices", r.vertices}};

@@ -242,11 +242,12 @@ Deprojector::Deprojector(const StreamInfo& info) : info_(info) {
     }
 }
 
-std::vector<Eigen::Vector3d> Deprojector::sensor_points(const DepthImage& depth,
-                                                        std::vector<Eigen::Vector3d>* to_sensor) const {
+std::vector<Eigen::Vector3d> Deprojector::sensor_points(const DepthImage& depth, std::vector<Eigen::Vector3d>* to_sensor,
+                                                        std::vector<int>* pixels) const {
   std::vector<Eigen::Vector3d> pts;
   pts.reserve(depth.data.size() / 4);
   if (to_sensor) to_sensor->clear();
+  if (pixels) pixels->clear();
   const bool laser = info_.sensor == Sensor::laser;
   const std::size_t n = std::min(depth.data.size(), rays_.size());
   for (std::size_t i = 0; i < n; ++i) {
@@ -256,6 +257,7 @@ std::vector<Eigen::Vector3d> Deprojector::sensor_points(const DepthImage& depth,
     const Eigen::Vector2d& r = rays_[i];
     const Eigen::Vector3d p = laser ? Eigen::Vector3d(r.x() * z, r.y(), z) : Eigen::Vector3d(r.x() * z, r.y() * z, z);
     pts.push_back(p);
+    if (pixels) pixels->push_back(static_cast<int>(i));
     if (to_sensor) {
       const Eigen::Vector3d origin = laser ? Eigen::Vector3d(0, r.y(), 0) : Eigen::Vector3d::Zero();
       to_sensor->push_back((origin - p).normalized());

@@ -27,7 +27,9 @@ std::vector<View> views_of_stream(const Stream& s) {
   for (std::size_t i = 0; i < s.frames.size(); ++i) {
     View& v = views[i];
     v.name = (s.dir / s.frames[i].file).string();
-    v.points = deproject.sensor_points(read_frame(s, i), &v.to_sensor);
+    v.points = deproject.sensor_points(read_frame(s, i), &v.to_sensor, &v.pixel);
+    v.width = s.info.width;
+    v.height = s.info.height;
     if (!s.poses.empty()) {
       v.pose = s.pose_of(i);
       if (!v.pose)
@@ -129,9 +131,16 @@ View view_of_cloud(const fs::path& path, const InputOptions& o) {
   pcl::fromPCLPointCloud2(blob, cloud);
   View v;
   v.name = path.string();
-  for (const auto& p : cloud)
-    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))  // organized clouds mark holes with NaN
-      v.points.emplace_back(p.x * o.input_unit_mm, p.y * o.input_unit_mm, p.z * o.input_unit_mm);
+  if (cloud.isOrganized()) {
+    v.width = static_cast<int>(cloud.width);
+    v.height = static_cast<int>(cloud.height);
+  }
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const auto& p = cloud[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;  // organized holes are NaN
+    v.points.emplace_back(p.x * o.input_unit_mm, p.y * o.input_unit_mm, p.z * o.input_unit_mm);
+    if (v.width) v.pixel.push_back(static_cast<int>(i));
+  }
   if (v.points.size() < 10)
     throw InvalidInput(fmt::format("{}: only {} finite points", path.string(), v.points.size()));
   v.spacing_mm = median_spacing(v.points);

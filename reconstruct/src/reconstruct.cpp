@@ -18,6 +18,8 @@
 #include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/point_types.h>
 #include <pcl/surface/gp3.h>
+#include <pcl/surface/mls.h>
+#include <pcl/surface/organized_fast_mesh.h>
 #include <pcl/surface/poisson.h>
 #include <spdlog/spdlog.h>
 
@@ -75,7 +77,11 @@ class QuietStdio {
 
 }  // namespace
 
-OrientedCloud fuse_input(const std::vector<fs::path>& inputs, const ReconstructOptions& o, ReconstructReport& rep) {
+namespace {
+
+// Loads and registers; fills the spacing, frame count and timings of the report.
+std::vector<View> load_and_register(const std::vector<fs::path>& inputs, const ReconstructOptions& o,
+                                    ReconstructReport& rep, std::vector<Eigen::Isometry3d>& poses) {
   using clock = std::chrono::steady_clock;
   auto t = clock::now();
   auto lap = [&t] {
@@ -84,7 +90,7 @@ OrientedCloud fuse_input(const std::vector<fs::path>& inputs, const ReconstructO
     t = now;
     return s;
   };
-  const std::vector<View> views = load_views(inputs, o.input);
+  std::vector<View> views = load_views(inputs, o.input);
   rep.frames = static_cast<int>(views.size());
   // The sensor's sampling is the spacing of one view (overlapping views would look finer).
   std::vector<double> spacings;
@@ -94,12 +100,82 @@ OrientedCloud fuse_input(const std::vector<fs::path>& inputs, const ReconstructO
   std::nth_element(spacings.begin(), spacings.begin() + spacings.size() / 2, spacings.end());
   rep.spacing_mm = spacings[spacings.size() / 2];
   rep.load_s = lap();
-  const auto poses = register_views(views, rep.spacing_mm, o.registration, rep.views);
+  poses = register_views(views, rep.spacing_mm, o.registration, rep.views);
   rep.register_s = lap();
+  return views;
+}
+
+}  // namespace
+
+OrientedCloud fuse_input(const std::vector<fs::path>& inputs, const ReconstructOptions& o, ReconstructReport& rep) {
+  std::vector<Eigen::Isometry3d> poses;
+  const std::vector<View> views = load_and_register(inputs, o, rep, poses);
+  const auto t = std::chrono::steady_clock::now();
   OrientedCloud cloud = fuse_views(views, poses, o, rep);
-  rep.fuse_s = lap();
-  spdlog::debug("load {:.2f} s, register {:.2f} s, fuse {:.2f} s", rep.load_s, rep.register_s, rep.fuse_s);
+  rep.fuse_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
   return cloud;
+}
+
+Reconstruction reconstruct(const std::vector<fs::path>& inputs, const ReconstructOptions& o, ReconstructReport& rep) {
+  std::vector<Eigen::Isometry3d> poses;
+  const std::vector<View> views = load_and_register(inputs, o, rep, poses);
+  auto t = std::chrono::steady_clock::now();
+  Reconstruction r;
+  r.cloud = fuse_views(views, poses, o, rep);
+  rep.fuse_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  t = std::chrono::steady_clock::now();
+  r.mesh = o.method == MeshMethod::organized ? mesh_views_organized(views, poses, o, rep) : mesh_cloud(r.cloud, o, rep);
+  rep.mesh_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  spdlog::debug("load {:.2f} s, register {:.2f} s, fuse {:.2f} s, mesh {:.2f} s", rep.load_s, rep.register_s,
+                rep.fuse_s, rep.mesh_s);
+  return r;
+}
+
+Mesh mesh_views_organized(const std::vector<View>& views, const std::vector<Eigen::Isometry3d>& poses,
+                          const ReconstructOptions& o, ReconstructReport& rep) {
+  TriangleSoup soup;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const View& v = views[i];
+    if ((i < rep.views.size() && rep.views[i].rejected) || v.width == 0) continue;
+    auto grid = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>(v.width, v.height,
+                                                                  pcl::PointXYZ(NAN, NAN, NAN));
+    grid->is_dense = false;
+    for (std::size_t k = 0; k < v.points.size(); ++k) {
+      const Eigen::Vector3d p = poses[i] * v.points[k];
+      (*grid)[v.pixel[k]] = pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+    }
+    pcl::OrganizedFastMesh<pcl::PointXYZ> ofm;
+    ofm.setInputCloud(grid);
+    ofm.setTriangulationType(pcl::OrganizedFastMesh<pcl::PointXYZ>::TRIANGLE_ADAPTIVE_CUT);
+    // Neighbouring pixels farther apart than a few spacings are a depth jump, not surface.
+    ofm.setMaxEdgeLength(static_cast<float>(4.0 * rep.spacing_mm), 0.0f, 0.0f);
+    ofm.storeShadowedFaces(false);
+    std::vector<pcl::Vertices> polys;
+    ofm.reconstruct(polys);
+    const int base = static_cast<int>(soup.vertices.size());
+    std::vector<int> index(grid->size(), -1);
+    for (const auto& poly : polys) {
+      if (poly.vertices.size() != 3) continue;
+      std::array<int, 3> f{};
+      for (int k = 0; k < 3; ++k) {
+        const auto pv = poly.vertices[k];
+        if (index[pv] < 0) {
+          index[pv] = static_cast<int>(soup.vertices.size()) - base;
+          const auto& q = (*grid)[pv];
+          soup.vertices.emplace_back(q.x, q.y, q.z);
+        }
+        f[k] = base + index[pv];
+      }
+      soup.faces.push_back(f);
+    }
+  }
+  if (soup.faces.empty()) throw ProcessingError("no organized views to mesh (organized meshing needs depth frames)");
+  Mesh mesh;
+  soup_to_mesh(soup, mesh);
+  rep.faces = mesh.n_faces();
+  rep.vertices = mesh.n_vertices();
+  (void)o;
+  return mesh;
 }
 
 OrientedCloud fuse_views(const std::vector<View>& views, const std::vector<Eigen::Isometry3d>& poses,
@@ -138,6 +214,32 @@ OrientedCloud fuse_views(const std::vector<View>& views, const std::vector<Eigen
     sor.filter(*kept);
     rep.outliers_removed = fused->size() - kept->size();
     fused = kept;
+  }
+  rep.mls_radius_mm = o.mls_radius_mm < 0 ? 3.0 * rep.spacing_mm : o.mls_radius_mm;
+  if (rep.mls_radius_mm > 0) {
+    // Moving least squares smooths the positions; the sensor directions are carried over from
+    // each smoothed point's nearest original point (MLS overwrites the normal fields).
+    pcl::MovingLeastSquares<pcl::PointNormal, pcl::PointNormal> mls;
+    auto tree = std::make_shared<pcl::search::KdTree<pcl::PointNormal>>();
+    mls.setInputCloud(fused);
+    mls.setSearchMethod(tree);
+    mls.setSearchRadius(rep.mls_radius_mm);
+    mls.setPolynomialOrder(2);
+    mls.setComputeNormals(false);
+    mls.setNumberOfThreads(2);
+    Cloud::Ptr smooth = std::make_shared<Cloud>();
+    mls.process(*smooth);
+    pcl::KdTreeFLANN<pcl::PointNormal> near;
+    near.setInputCloud(fused);
+    std::vector<int> idx(1);
+    std::vector<float> sq(1);
+    for (auto& q : *smooth)
+      if (near.nearestKSearch(q, 1, idx, sq) == 1) {
+        q.normal_x = (*fused)[idx[0]].normal_x;
+        q.normal_y = (*fused)[idx[0]].normal_y;
+        q.normal_z = (*fused)[idx[0]].normal_z;
+      }
+    if (smooth->size() > 10) fused = smooth;
   }
   rep.points_fused = fused->size();
 

@@ -165,3 +165,24 @@ TEST(Reconstruct, ReadsAPlainFolderOfDepthImagesWithIntrinsics) {
   ASSERT_EQ(views[0].points.size(), expected.size());
   EXPECT_LT((views[0].points[100] - expected[100]).norm(), 1e-9);
 }
+
+TEST(Reconstruct, OrganizedMeshingAndMlsStayOnThePart) {
+  const auto dir = test::scratch_dir();
+  const auto part = read_soup(test::source_dir() / "fixtures/parts/shaft.stl");
+  const SurfaceQuery truth(part);
+  const auto scan = small_scan(dir, "shaft");
+  for (bool organized : {true, false}) {
+    ReconstructOptions o;
+    o.method = organized ? MeshMethod::organized : MeshMethod::poisson;
+    o.mls_radius_mm = organized ? 0 : -1;  // MLS with the Poisson run
+    ReconstructReport rep;
+    const Reconstruction r = reconstruct({scan}, o, rep);
+    const TriangleSoup soup = mesh_to_soup(r.mesh);
+    ASSERT_GT(soup.faces.size(), 1000u);
+    std::vector<double> d;
+    for (std::size_t i = 0; i < soup.vertices.size(); i += 7) d.push_back(truth.closest(soup.vertices[i])->distance);
+    std::sort(d.begin(), d.end());
+    EXPECT_LT(d[d.size() / 2], 0.06) << (organized ? "organized" : "poisson+mls");
+    if (!organized) EXPECT_GT(rep.mls_radius_mm, 0);
+  }
+}

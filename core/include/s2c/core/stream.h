@@ -70,8 +70,10 @@ class Deprojector {
   explicit Deprojector(const StreamInfo& info);
   /// Points of the valid pixels in the sensor frame (mm), row-major. `to_sensor`, if given,
   /// receives the unit direction from each point towards where it was seen from.
+  /// `pixels`, if given, receives each point's pixel index (v · width + u).
   std::vector<Eigen::Vector3d> sensor_points(const DepthImage& depth,
-                                             std::vector<Eigen::Vector3d>* to_sensor = nullptr) const;
+                                             std::vector<Eigen::Vector3d>* to_sensor = nullptr,
+                                             std::vector<int>* pixels = nullptr) const;
 
  private:
   StreamInfo info_;

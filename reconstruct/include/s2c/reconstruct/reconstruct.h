@@ -11,7 +11,7 @@
 
 namespace s2c {
 
-enum class MeshMethod { poisson, gp3 };
+enum class MeshMethod { poisson, gp3, organized };
 
 struct ReconstructOptions {
   InputOptions input;
@@ -22,14 +22,15 @@ struct ReconstructOptions {
   double trim_mm = 0;         ///< drop surface farther than this from the data; 0 = 3 × spacing
   int normal_neighbours = 24; ///< k for normal estimation
   bool remove_outliers = true;
+  double mls_radius_mm = 0;   ///< moving-least-squares smoothing radius; 0 = off, < 0 = 3 × spacing
 };
 
 struct ReconstructReport {
   int frames = 0;
   std::vector<ViewAlignment> views;  ///< registration residual per view
-  double load_s = 0, register_s = 0, fuse_s = 0;  ///< seconds per step of fuse_input
+  double load_s = 0, register_s = 0, fuse_s = 0, mesh_s = 0;  ///< seconds per step
   std::size_t points_in = 0, points_fused = 0, outliers_removed = 0;
-  double spacing_mm = 0, voxel_mm = 0, trim_mm = 0;
+  double spacing_mm = 0, voxel_mm = 0, trim_mm = 0, mls_radius_mm = 0;
   int poisson_depth = 0;
   std::size_t faces_before_trim = 0, faces = 0, vertices = 0;
 };
@@ -44,6 +45,22 @@ struct OrientedCloud {
 /// \throw InvalidInput naming the file or frame; ProcessingError when views do not overlap.
 OrientedCloud fuse_input(const std::vector<std::filesystem::path>& inputs, const ReconstructOptions& options,
                          ReconstructReport& report);
+
+struct Reconstruction {
+  OrientedCloud cloud;
+  Mesh mesh;
+};
+
+/// The whole stage: load, register, fuse, mesh (Poisson or GP3 on the fused cloud, or
+/// OrganizedFastMesh per view, concatenated, for organized frames).
+Reconstruction reconstruct(const std::vector<std::filesystem::path>& inputs, const ReconstructOptions& options,
+                           ReconstructReport& report);
+
+/// Meshes each organized view on its pixel grid (OrganizedFastMesh) and concatenates them:
+/// exact to the measurements, but overlapping views stay separate sheets (a preview, or for
+/// single frames). \throw ProcessingError when no view is organized.
+Mesh mesh_views_organized(const std::vector<View>& views, const std::vector<Eigen::Isometry3d>& poses,
+                          const ReconstructOptions& options, ReconstructReport& report);
 
 /// Fuses registered views (rejected ones in `alignment` skipped): voxel grid at the spacing,
 /// statistical outlier removal, normals oriented towards the sensors.

@@ -18,6 +18,8 @@ struct View {
   std::vector<Eigen::Vector3d> to_sensor;    ///< unit direction towards the sensor per point, or empty if unknown
   std::optional<Eigen::Isometry3d> pose;     ///< sensor-to-world from the recording
   double spacing_mm = 0;                     ///< median nearest-neighbour distance within the view
+  int width = 0, height = 0;                 ///< pixel grid of organized views (0 for plain clouds)
+  std::vector<int> pixel;                    ///< per point, v · width + u in that grid
 };
 
 struct InputOptions {
