@@ -39,6 +39,8 @@ int main(int argc, char** argv) {
   app.add_option("--voxel", o.voxel_mm, "Fusion voxel size, mm (default: measured point spacing)");
   app.add_option("--depth", o.poisson_depth, "Poisson octree depth (default: from spacing and size)");
   app.add_option("--trim", o.trim_mm, "Drop surface farther than this from the data, mm (default: 3 × spacing)");
+  app.add_option("--outliers", o.outlier_sigma,
+                 "Statistical outlier removal threshold in standard deviations (0 = off)")->capture_default_str();
   app.add_option("--register", registration,
                  "auto (refine recorded poses, else global), refine, global (ignore poses), off")
       ->check(CLI::IsMember({"auto", "refine", "global", "off"}))->capture_default_str();
@@ -87,7 +89,7 @@ int main(int argc, char** argv) {
     report.parameters() = {{"input", inputs}, {"output", output}, {"method", method}, {"register", registration},
                            {"voxel_mm", r.voxel_mm},
                            {"poisson_depth", r.poisson_depth}, {"trim_mm", r.trim_mm},
-                           {"normal_neighbours", o.normal_neighbours}, {"mls_radius_mm", r.mls_radius_mm}};
+                           {"normal_neighbours", o.normal_neighbours}, {"outlier_sigma", o.outlier_sigma}, {"mls_radius_mm", r.mls_radius_mm}};
     report.counts() = {{"frames", r.frames}, {"points_in", r.points_in}, {"points_fused", r.points_fused},
                        {"outliers_removed", r.outliers_removed}, {"spacing_mm", r.spacing_mm},
                        {"faces_before_trim", r.faces_before_trim}, {"faces", r.faces}, {"vertices", r.vertices}};

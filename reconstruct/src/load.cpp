@@ -13,7 +13,7 @@
 #include "s2c/core/progress.h"
 #include "s2c/core/stream.h"
 #include "s2c/reconstruct/views.h"
-#include "spacing.h"
+#include "cloud_util.h"
 
 namespace fs = std::filesystem;
 

@@ -27,7 +27,7 @@
 #include "s2c/core/files.h"
 #include "s2c/core/progress.h"
 #include "s2c/core/stream.h"
-#include "spacing.h"
+#include "cloud_util.h"
 
 namespace fs = std::filesystem;
 
@@ -189,14 +189,7 @@ OrientedCloud fuse_views(const std::vector<View>& views, const std::vector<Eigen
       const Eigen::Vector3d p = T * v.points[k];
       // The direction to the sensor rides in the normal fields until normals are estimated.
       const Eigen::Vector3d d = v.to_sensor.empty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(T.linear() * v.to_sensor[k]);
-      pcl::PointNormal q;
-      q.x = static_cast<float>(p.x());
-      q.y = static_cast<float>(p.y());
-      q.z = static_cast<float>(p.z());
-      q.normal_x = static_cast<float>(d.x());
-      q.normal_y = static_cast<float>(d.y());
-      q.normal_z = static_cast<float>(d.z());
-      raw->push_back(q);
+      raw->push_back(point_normal(p, d));
     }
   }
   rep.points_in = raw->size();
@@ -205,12 +198,12 @@ OrientedCloud fuse_views(const std::vector<View>& views, const std::vector<Eigen
   rep.voxel_mm = o.voxel_mm > 0 ? o.voxel_mm : rep.spacing_mm;
 
   Cloud::Ptr fused = std::make_shared<Cloud>(voxel_downsample(*raw, rep.voxel_mm));
-  if (o.remove_outliers && fused->size() > 50) {
+  if (o.outlier_sigma > 0 && fused->size() > 50) {
     Cloud::Ptr kept = std::make_shared<Cloud>();
     pcl::StatisticalOutlierRemoval<pcl::PointNormal> sor;
     sor.setInputCloud(fused);
     sor.setMeanK(16);
-    sor.setStddevMulThresh(2.5);
+    sor.setStddevMulThresh(o.outlier_sigma);
     sor.filter(*kept);
     rep.outliers_removed = fused->size() - kept->size();
     fused = kept;
@@ -271,16 +264,7 @@ OrientedCloud fuse_views(const std::vector<View>& views, const std::vector<Eigen
 
 Mesh mesh_cloud(const OrientedCloud& in, const ReconstructOptions& o, ReconstructReport& rep) {
   auto cloud = std::make_shared<Cloud>();
-  for (std::size_t i = 0; i < in.points.size(); ++i) {
-    pcl::PointNormal p;
-    p.x = static_cast<float>(in.points[i].x());
-    p.y = static_cast<float>(in.points[i].y());
-    p.z = static_cast<float>(in.points[i].z());
-    p.normal_x = static_cast<float>(in.normals[i].x());
-    p.normal_y = static_cast<float>(in.normals[i].y());
-    p.normal_z = static_cast<float>(in.normals[i].z());
-    cloud->push_back(p);
-  }
+  for (std::size_t i = 0; i < in.points.size(); ++i) cloud->push_back(point_normal(in.points[i], in.normals[i]));
   if (cloud->size() < 10) throw ProcessingError("too few points with normals to mesh");
   Eigen::Vector4f lo, hi;
   pcl::getMinMax3D(*cloud, lo, hi);

@@ -17,7 +17,7 @@
 
 #include "s2c/core/errors.h"
 #include "s2c/core/progress.h"
-#include "spacing.h"
+#include "cloud_util.h"
 
 namespace s2c {
 namespace {
@@ -36,16 +36,9 @@ CloudPN::Ptr prepare(const View& v, double voxel) {
   for (const auto& p : v.points) centroid += p;
   centroid /= static_cast<double>(std::max<std::size_t>(1, v.points.size()));
   for (std::size_t i = 0; i < v.points.size(); ++i) {
-    PN q;
-    q.x = static_cast<float>(v.points[i].x());
-    q.y = static_cast<float>(v.points[i].y());
-    q.z = static_cast<float>(v.points[i].z());
     // Unknown sensor (plain clouds): face away from the view's centroid.
     const Eigen::Vector3d d = v.to_sensor.empty() ? Eigen::Vector3d(v.points[i] - centroid) : v.to_sensor[i];
-    q.normal_x = static_cast<float>(d.x());
-    q.normal_y = static_cast<float>(d.y());
-    q.normal_z = static_cast<float>(d.z());
-    raw->push_back(q);
+    raw->push_back(point_normal(v.points[i], d));
   }
   auto down = std::make_shared<CloudPN>(voxel_downsample(*raw, voxel));
   // Six unknowns need a few thousand well-spread points, not a room's worth: coarsen the grid

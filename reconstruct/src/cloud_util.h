@@ -1,5 +1,6 @@
 #pragma once
-// Point spacing: the scale every reconstruct default derives from.
+// Small cloud helpers shared by reconstruct's steps: the point spacing every default derives
+// from, a voxel grid that works at any extent, and Eigen → PCL point conversion.
 #include <vector>
 
 #include <Eigen/Core>
@@ -20,5 +21,18 @@ namespace s2c {
 /// pcl::VoxelGrid), keyed by a 64-bit hash so any extent works: PCL's grid silently returns
 /// its input when extent / leaf overflows 32-bit indices (room-sized scans at fine voxels).
 pcl::PointCloud<pcl::PointNormal> voxel_downsample(const pcl::PointCloud<pcl::PointNormal>& in, double voxel);
+
+/// A PCL point from a position and a direction (a normal, or the way to the sensor).
+inline pcl::PointNormal point_normal(const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
+  pcl::PointNormal q;
+  q.x = static_cast<float>(p.x());
+  q.y = static_cast<float>(p.y());
+  q.z = static_cast<float>(p.z());
+  q.normal_x = static_cast<float>(n.x());
+  q.normal_y = static_cast<float>(n.y());
+  q.normal_z = static_cast<float>(n.z());
+  q.curvature = 0;
+  return q;
+}
 
 }  // namespace s2c

@@ -1,4 +1,4 @@
-#include "spacing.h"
+#include "cloud_util.h"
 
 #include <algorithm>
 #include <cmath>
@@ -59,14 +59,7 @@ pcl::PointCloud<pcl::PointNormal> voxel_downsample(const pcl::PointCloud<pcl::Po
   out.reserve(order.size());
   for (std::uint64_t k : order) {
     const Acc& a = cells[k];
-    pcl::PointNormal q;
-    const Eigen::Vector3d p = a.p / a.count, n = a.n / a.count;
-    q.x = static_cast<float>(p.x());
-    q.y = static_cast<float>(p.y());
-    q.z = static_cast<float>(p.z());
-    q.normal_x = static_cast<float>(n.x());
-    q.normal_y = static_cast<float>(n.y());
-    q.normal_z = static_cast<float>(n.z());
+    pcl::PointNormal q = point_normal(a.p / a.count, a.n / a.count);
     q.curvature = static_cast<float>(a.curvature / a.count);
     out.push_back(q);
   }
