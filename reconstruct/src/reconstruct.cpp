@@ -75,21 +75,18 @@ class QuietStdio {
   int saved_out_ = -1, saved_err_ = -1;
 };
 
-}  // namespace
-
-namespace {
+// Seconds since `t`, and restarts `t`: the report's per-step timings.
+double lap(std::chrono::steady_clock::time_point& t) {
+  const auto now = std::chrono::steady_clock::now();
+  const double s = std::chrono::duration<double>(now - t).count();
+  t = now;
+  return s;
+}
 
 // Loads and registers; fills the spacing, frame count and timings of the report.
 std::vector<View> load_and_register(const std::vector<fs::path>& inputs, const ReconstructOptions& o,
                                     ReconstructReport& rep, std::vector<Eigen::Isometry3d>& poses) {
-  using clock = std::chrono::steady_clock;
-  auto t = clock::now();
-  auto lap = [&t] {
-    const auto now = clock::now();
-    const double s = std::chrono::duration<double>(now - t).count();
-    t = now;
-    return s;
-  };
+  auto t = std::chrono::steady_clock::now();
   std::vector<View> views = load_views(inputs, o.input);
   rep.frames = static_cast<int>(views.size());
   // The sensor's sampling is the spacing of one view (overlapping views would look finer).
@@ -99,9 +96,9 @@ std::vector<View> load_and_register(const std::vector<fs::path>& inputs, const R
   if (spacings.empty()) throw InvalidInput("the input has no two distinct points");
   std::nth_element(spacings.begin(), spacings.begin() + spacings.size() / 2, spacings.end());
   rep.spacing_mm = spacings[spacings.size() / 2];
-  rep.load_s = lap();
+  rep.load_s = lap(t);
   poses = register_views(views, rep.spacing_mm, o.registration, rep.views);
-  rep.register_s = lap();
+  rep.register_s = lap(t);
   return views;
 }
 
@@ -110,9 +107,9 @@ std::vector<View> load_and_register(const std::vector<fs::path>& inputs, const R
 OrientedCloud fuse_input(const std::vector<fs::path>& inputs, const ReconstructOptions& o, ReconstructReport& rep) {
   std::vector<Eigen::Isometry3d> poses;
   const std::vector<View> views = load_and_register(inputs, o, rep, poses);
-  const auto t = std::chrono::steady_clock::now();
+  auto t = std::chrono::steady_clock::now();
   OrientedCloud cloud = fuse_views(views, poses, o, rep);
-  rep.fuse_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  rep.fuse_s = lap(t);
   return cloud;
 }
 
@@ -122,10 +119,9 @@ Reconstruction reconstruct(const std::vector<fs::path>& inputs, const Reconstruc
   auto t = std::chrono::steady_clock::now();
   Reconstruction r;
   r.cloud = fuse_views(views, poses, o, rep);
-  rep.fuse_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-  t = std::chrono::steady_clock::now();
+  rep.fuse_s = lap(t);
   r.mesh = o.method == MeshMethod::organized ? mesh_views_organized(views, poses, o, rep) : mesh_cloud(r.cloud, o, rep);
-  rep.mesh_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  rep.mesh_s = lap(t);
   spdlog::debug("load {:.2f} s, register {:.2f} s, fuse {:.2f} s, mesh {:.2f} s", rep.load_s, rep.register_s,
                 rep.fuse_s, rep.mesh_s);
   return r;
@@ -321,7 +317,7 @@ Mesh mesh_cloud(const OrientedCloud& in, const ReconstructOptions& o, Reconstruc
   for (const auto& poly : pm.polygons) {
     if (poly.vertices.size() != 3) continue;
     bool ok = true;
-    for (auto v : poly.vertices) ok = ok && v < verts.size() && keep[v];
+    for (auto v : poly.vertices) ok = ok && static_cast<std::size_t>(v) < verts.size() && keep[v];
     if (!ok) continue;
     std::array<int, 3> f{};
     for (int k = 0; k < 3; ++k) {
