@@ -26,74 +26,15 @@
 #include "s2c/core/errors.h"
 #include "s2c/core/io.h"
 #include "s2c/core/mesh.h"
+#include "common/sampling.h"
 
 namespace {
 
 using Eigen::Vector3d;
-
-// SplitMix64 → doubles in [0, 1): identical on every platform and standard library.
-struct Rng {
-  std::uint64_t s;
-  std::uint64_t next() {
-    std::uint64_t z = (s += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
-};
-
-struct Samples {
-  std::vector<Vector3d> points;
-  double area = 0;
-};
-
-// `n` points uniformly distributed by area over the soup's triangles.
-Samples sample_surface(const s2c::TriangleSoup& soup, std::size_t n, std::uint64_t seed) {
-  Samples out;
-  std::vector<double> cdf(soup.faces.size());
-  double total = 0;
-  for (std::size_t f = 0; f < soup.faces.size(); ++f) {
-    const auto& t = soup.faces[f];
-    const Vector3d &a = soup.vertices[t[0]], &b = soup.vertices[t[1]], &c = soup.vertices[t[2]];
-    total += 0.5 * (b - a).cross(c - a).norm();
-    cdf[f] = total;
-  }
-  out.area = total;
-  if (total <= 0) throw s2c::InvalidInput("the mesh has zero area");
-  Rng rng{seed};
-  out.points.reserve(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double r = rng.uniform() * total;
-    std::size_t f = static_cast<std::size_t>(std::upper_bound(cdf.begin(), cdf.end(), r) - cdf.begin());
-    f = std::min(f, cdf.size() - 1);
-    const auto& t = soup.faces[f];
-    const double s = std::sqrt(rng.uniform()), u = rng.uniform();
-    const Vector3d &a = soup.vertices[t[0]], &b = soup.vertices[t[1]], &c = soup.vertices[t[2]];
-    out.points.push_back((1 - s) * a + s * (1 - u) * b + s * u * c);
-  }
-  return out;
-}
-
-// Distance of every point to the surface (unbounded queries), on all cores.
-// Also returns the closest points (on the queried surface).
-std::vector<double> distances(const s2c::SurfaceQuery& q, const std::vector<Vector3d>& pts,
-                              std::vector<Vector3d>* closest = nullptr) {
-  std::vector<double> d(pts.size(), 0.0);
-  if (closest) closest->assign(pts.size(), Vector3d::Zero());
-  const unsigned nt = std::max(1u, std::thread::hardware_concurrency());
-  std::vector<std::thread> threads;
-  for (unsigned t = 0; t < nt; ++t)
-    threads.emplace_back([&, t] {
-      for (std::size_t i = t; i < pts.size(); i += nt) {
-        const auto hit = q.closest(pts[i]);
-        d[i] = hit ? hit->distance : std::numeric_limits<double>::infinity();
-        if (closest && hit) (*closest)[i] = hit->point;
-      }
-    });
-  for (auto& th : threads) th.join();
-  return d;
-}
+using s2c::bench::Rng;
+using s2c::bench::Samples;
+using s2c::bench::sample_surface;
+using s2c::bench::distances;
 
 // The sharp edges of a (welded) triangle surface: dihedral angle above `angle_deg`, or an edge
 // with other than two faces. Answers "is this point within `band` of a sharp edge?" via a grid.

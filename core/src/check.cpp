@@ -66,6 +66,9 @@ CheckResult check_mesh(const TriangleSoup& s, const CheckOptions& options) {
   for (std::size_t i = 0; i < s.faces.size(); ++i)
     for (int v : s.faces[i])
       if (v < 0 || v >= nv) throw InvalidInput(fmt::format("face {} refers to missing vertex {}", i, v));
+  // The exact predicates cannot take NaN or infinity (GMP aborts on them).
+  for (std::size_t i = 0; i < s.vertices.size(); ++i)
+    if (!s.vertices[i].allFinite()) throw InvalidInput(fmt::format("vertex {} has a non-finite coordinate", i));
 
   // Edges.
   std::unordered_map<std::uint64_t, EdgeInfo> edges;

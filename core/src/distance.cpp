@@ -68,7 +68,44 @@ bool point_query(RTCPointQueryFunctionArguments* args) {
   return false;
 }
 
+struct CollectState {
+  const TriangleSoup* soup;
+  Eigen::Vector3d p;
+  double radius;
+  std::vector<int>* faces;
+};
+
+bool collect_query(RTCPointQueryFunctionArguments* args) {
+  auto* st = static_cast<CollectState*>(args->userPtr);
+  const auto& f = st->soup->faces[args->primID];
+  const Eigen::Vector3d q = closest_point_on_triangle(st->p, st->soup->vertices[f[0]], st->soup->vertices[f[1]],
+                                                      st->soup->vertices[f[2]]);
+  if ((q - st->p).norm() <= st->radius) st->faces->push_back(static_cast<int>(args->primID));
+  return false;  // keep the radius: we want all of them
+}
+
+RTCPointQuery make_query(const Eigen::Vector3d& local, double radius) {
+  RTCPointQuery q;
+  q.x = static_cast<float>(local.x());
+  q.y = static_cast<float>(local.y());
+  q.z = static_cast<float>(local.z());
+  q.time = 0;
+  // float boxes: pad the radius so rounding never prunes a face that is within it
+  q.radius = static_cast<float>(std::min(radius, 1e30)) * (1 + 1e-5f) + 1e-4f;
+  return q;
+}
+
 }  // namespace
+
+std::vector<int> SurfaceQuery::faces_within(const Eigen::Vector3d& p, double radius) const {
+  std::vector<int> faces;
+  CollectState st{impl_->soup, p, radius, &faces};
+  RTCPointQuery q = make_query(p - impl_->origin, radius);
+  RTCPointQueryContext ctx;
+  rtcInitPointQueryContext(&ctx);
+  rtcPointQuery(impl_->scene, &q, &ctx, collect_query, &st);
+  return faces;
+}
 
 SurfaceQuery::SurfaceQuery(const TriangleSoup& soup) : impl_(std::make_unique<Impl>()) {
   auto& m = *impl_;
@@ -103,14 +140,7 @@ const TriangleSoup& SurfaceQuery::soup() const { return *impl_->soup; }
 
 std::optional<SurfacePoint> SurfaceQuery::closest(const Eigen::Vector3d& p, double max_distance) const {
   QueryState st{impl_->soup, p, {}, false};
-  RTCPointQuery q;
-  const Eigen::Vector3d local = p - impl_->origin;
-  q.x = static_cast<float>(local.x());
-  q.y = static_cast<float>(local.y());
-  q.z = static_cast<float>(local.z());
-  q.time = 0;
-  // float boxes: pad the radius so rounding never prunes the true closest face
-  q.radius = static_cast<float>(std::min(max_distance, 1e30)) * (1 + 1e-5f) + 1e-4f;
+  RTCPointQuery q = make_query(p - impl_->origin, max_distance);
   RTCPointQueryContext ctx;
   rtcInitPointQueryContext(&ctx);
   rtcPointQuery(impl_->scene, &q, &ctx, point_query, &st);

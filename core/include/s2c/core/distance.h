@@ -2,6 +2,7 @@
 /// \file Distances from points to a triangle surface (Embree BVH point queries), and a ray caster.
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -30,6 +31,9 @@ class SurfaceQuery {
   /// Closest surface point within `max_distance` (mm); nullopt if none is that close.
   /// A bounded radius is much faster than an unbounded query.
   std::optional<SurfacePoint> closest(const Eigen::Vector3d& p, double max_distance = 1e30) const;
+
+  /// Every face with a point within `radius` of p (unordered).
+  std::vector<int> faces_within(const Eigen::Vector3d& p, double radius) const;
 
   struct Hit {
     double t = 0;  ///< distance along the (unit) direction, mm

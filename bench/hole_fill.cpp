@@ -1,0 +1,427 @@
+// Hole filling benchmark (bench/README.md, "Hole filling"): cuts curved holes into meshes with a
+// known surface, fills each with our rbf, liepa and auto, and with CGAL's
+// triangulate_refine_and_fair_hole when CGAL is found, in the same run; prints deviation of
+// the new vertices from the true surface and time per hole. Then times the RBF solve alone at
+// the paper's sizes (Table 1: 134 and 524 constraint points) and at 1000 and 5000.
+//
+//   s2c-bench-holefill [--holes N] [--real MESH]     (default MESH: the fandisk CAD part)
+//   S2C_BENCH_VERBOSE=1 prints every hole's size, method choice and deviation on stderr.
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <functional>
+#include <map>
+#include <random>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "fill/rbf.h"
+#include "s2c/core/check.h"
+#include "s2c/core/io.h"
+#include "s2c/repair/fill.h"
+
+#ifdef S2C_HAVE_CGAL
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
+#include <CGAL/Surface_mesh.h>
+#endif
+
+using namespace s2c;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// ----- test shapes ---------------------------------------------------------------------------
+
+TriangleSoup icosphere(double radius, int levels) {
+  TriangleSoup s;
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<Eigen::Vector3d> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                                    {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  for (auto& p : v) p.normalize();
+  std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                                       {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
+                                       {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  for (int l = 0; l < levels; ++l) {
+    std::map<std::pair<int, int>, int> mid;
+    const auto midpoint = [&](int a, int b) {
+      const auto key = std::minmax(a, b);
+      const auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      v.push_back((v[a] + v[b]).normalized());
+      return mid[key] = static_cast<int>(v.size()) - 1;
+    };
+    std::vector<std::array<int, 3>> g;
+    for (const auto& tri : f) {
+      const int a = midpoint(tri[0], tri[1]), b = midpoint(tri[1], tri[2]), c = midpoint(tri[2], tri[0]);
+      g.insert(g.end(), {{tri[0], a, c}, {tri[1], b, a}, {tri[2], c, b}, {a, b, c}});
+    }
+    f.swap(g);
+  }
+  for (auto& p : v) s.vertices.push_back(radius * p);
+  s.faces = f;
+  return s;
+}
+
+// A closed surface from a (u, v) parametrisation periodic in u; `v_periodic` closes v too
+// (torus), otherwise the two rims are capped by fans.
+TriangleSoup param_surface(int nu, int nv, bool v_periodic, const std::function<Eigen::Vector3d(double, double)>& at) {
+  TriangleSoup s;
+  const int rows = v_periodic ? nv : nv + 1;
+  for (int j = 0; j < rows; ++j)
+    for (int i = 0; i < nu; ++i) s.vertices.push_back(at((i + 0.5 * (j % 2)) / nu, double(j) / nv));
+  const auto id = [&](int i, int j) { return (j % rows) * nu + (i % nu); };
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      if (j % 2 == 0) {
+        s.faces.push_back({id(i, j), id(i + 1, j), id(i, j + 1)});
+        s.faces.push_back({id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
+      } else {
+        s.faces.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+        s.faces.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      }
+    }
+  if (!v_periodic) {
+    const int b = static_cast<int>(s.vertices.size());
+    Eigen::Vector3d c0 = Eigen::Vector3d::Zero(), c1 = Eigen::Vector3d::Zero();
+    for (int i = 0; i < nu; ++i) {
+      c0 += s.vertices[id(i, 0)] / nu;
+      c1 += s.vertices[id(i, nv)] / nu;
+    }
+    s.vertices.push_back(c0);
+    s.vertices.push_back(c1);
+    for (int i = 0; i < nu; ++i) {
+      s.faces.push_back({b, id(i + 1, 0), id(i, 0)});
+      s.faces.push_back({b + 1, id(i, nv), id(i + 1, nv)});
+    }
+  }
+  return s;
+}
+
+// ----- distances -----------------------------------------------------------------------------
+
+// Closest point on triangle abc to p (Ericson, Real-Time Collision Detection 5.1.5).
+Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                    const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+  const double denom = 1.0 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+using Distance = std::function<double(const Eigen::Vector3d&)>;
+
+// Distance to the removed faces: the true surface of a real mesh inside its hole.
+Distance removed_faces_distance(const TriangleSoup& full, const std::vector<int>& removed) {
+  std::vector<std::array<Eigen::Vector3d, 3>> tris;
+  for (int f : removed)
+    tris.push_back({full.vertices[full.faces[f][0]], full.vertices[full.faces[f][1]], full.vertices[full.faces[f][2]]});
+  return [tris](const Eigen::Vector3d& p) {
+    double best = 1e300;
+    for (const auto& t : tris) best = std::min(best, (closest_on_triangle(p, t[0], t[1], t[2]) - p).norm());
+    return best;
+  };
+}
+
+// ----- hole cutting --------------------------------------------------------------------------
+
+struct Cut {
+  TriangleSoup soup;         // the mesh with the hole
+  repair::Hole hole;         // its loop in fill order
+  std::vector<int> removed;  // face indices of the original
+};
+
+// Grows a hole from a seed face over face neighbours whose centroid lies in an ellipsoid with
+// random axes (curved, irregular rim). Accepts it only when its boundary is one simple loop.
+bool cut_hole(const TriangleSoup& s, std::mt19937& rng, double size, std::size_t max_faces, Cut& out) {
+  std::uniform_int_distribution<int> pick(0, static_cast<int>(s.faces.size()) - 1);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const int seed = pick(rng);
+  const auto centroid = [&](int f) {
+    return Eigen::Vector3d((s.vertices[s.faces[f][0]] + s.vertices[s.faces[f][1]] + s.vertices[s.faces[f][2]]) / 3);
+  };
+  const Eigen::Vector3d c = centroid(seed);
+  const Eigen::Matrix3d rot =
+      Eigen::AngleAxisd(M_PI * u(rng), Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized()).toRotationMatrix();
+  const Eigen::Vector3d axes = size * Eigen::Vector3d(1.0, 0.5 + 0.25 * (u(rng) + 1), 0.4 + 0.2 * (u(rng) + 1));
+  const auto inside = [&](int f) {
+    return ((rot.transpose() * (centroid(f) - c)).cwiseQuotient(axes)).squaredNorm() < 1;
+  };
+  std::map<std::pair<int, int>, int> by_edge;
+  for (int f = 0; f < static_cast<int>(s.faces.size()); ++f)
+    for (int k = 0; k < 3; ++k) by_edge[{s.faces[f][k], s.faces[f][(k + 1) % 3]}] = f;
+  std::vector<char> removed(s.faces.size(), 0);
+  std::vector<int> stack{seed}, list;
+  removed[seed] = 1;
+  while (!stack.empty()) {
+    const int f = stack.back();
+    stack.pop_back();
+    list.push_back(f);
+    if (list.size() > max_faces) return false;
+    for (int k = 0; k < 3; ++k) {
+      const auto it = by_edge.find({s.faces[f][(k + 1) % 3], s.faces[f][k]});
+      if (it != by_edge.end() && !removed[it->second] && inside(it->second)) {
+        removed[it->second] = 1;
+        stack.push_back(it->second);
+      }
+    }
+  }
+  if (list.size() < 6) return false;
+  out = Cut{};
+  out.soup.vertices = s.vertices;
+  for (int f = 0; f < static_cast<int>(s.faces.size()); ++f)
+    if (!removed[f]) out.soup.faces.push_back(s.faces[f]);
+  out.removed = list;
+  // Loop: boundary half-edges walked backwards; reject anything but one simple loop.
+  std::map<int, int> next;
+  std::set<std::pair<int, int>> half;
+  for (const auto& f : out.soup.faces)
+    for (int k = 0; k < 3; ++k) half.insert({f[k], f[(k + 1) % 3]});
+  for (const auto& f : out.soup.faces)
+    for (int k = 0; k < 3; ++k) {
+      const int a = f[k], b = f[(k + 1) % 3];
+      if (!half.count({b, a}) && !next.emplace(b, a).second) return false;  // pinched rim
+    }
+  if (next.empty()) return false;
+  int v = next.begin()->first;
+  do {
+    out.hole.loop.push_back(v);
+    v = next[v];
+  } while (v != out.hole.loop.front() && out.hole.loop.size() <= next.size());
+  return out.hole.loop.size() == next.size();
+}
+
+// ----- fillers -------------------------------------------------------------------------------
+
+struct Outcome {
+  bool ok = false;
+  double seconds = 0;
+  std::vector<Eigen::Vector3d> new_points;
+  std::string note;
+};
+
+Outcome fill_ours(const Cut& cut, repair::FillMethod m) {
+  Outcome o;
+  TriangleSoup s = cut.soup;
+  repair::FillOptions opt;
+  opt.method = m;
+  const std::size_t before = s.vertices.size();
+  const auto t0 = Clock::now();
+  const auto r = repair::fill_holes(s, {cut.hole}, opt);
+  o.seconds = since(t0);
+  o.ok = r[0].filled;
+  o.note = r[0].filled ? to_string(r[0].method) : r[0].reason;
+  if (o.ok) {
+    CheckOptions co;
+    const CheckResult c = check_mesh(s, co);
+    if (!c.cad_ready) {
+      o.ok = false;
+      o.note = "not cad_ready";
+    }
+  }
+  o.new_points.assign(s.vertices.begin() + static_cast<std::ptrdiff_t>(before), s.vertices.end());
+  if (std::getenv("S2C_BENCH_VERBOSE"))
+    std::fprintf(stderr, "rim %zu, new %zu, %s%s\n", cut.hole.loop.size(), o.new_points.size(), r[0].choice.c_str(),
+                 r[0].reason.c_str());
+  return o;
+}
+
+#ifdef S2C_HAVE_CGAL
+Outcome fill_cgal(const Cut& cut) {
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using SM = CGAL::Surface_mesh<K::Point_3>;
+  Outcome o;
+  SM m;
+  std::vector<SM::Vertex_index> vs;
+  for (const auto& p : cut.soup.vertices) vs.push_back(m.add_vertex(K::Point_3(p.x(), p.y(), p.z())));
+  for (const auto& f : cut.soup.faces)
+    if (m.add_face(vs[f[0]], vs[f[1]], vs[f[2]]) == SM::null_face()) {
+      o.note = "CGAL could not build the mesh";
+      return o;
+    }
+  const auto [h, found] = CGAL::halfedge(vs[cut.hole.loop[0]], vs[cut.hole.loop[1]], m);
+  if (!found || !m.is_border(h)) {
+    o.note = "no border halfedge";
+    return o;
+  }
+  std::vector<SM::Face_index> faces;
+  std::vector<SM::Vertex_index> verts;
+  const auto t0 = Clock::now();
+  const auto result = CGAL::Polygon_mesh_processing::triangulate_refine_and_fair_hole(
+      m, h, std::back_inserter(faces), std::back_inserter(verts));
+  o.seconds = since(t0);
+  o.ok = std::get<0>(result);
+  o.note = o.ok ? "cgal" : "fairing failed";
+  for (const auto v : verts) {
+    const auto& p = m.point(v);
+    o.new_points.push_back({p.x(), p.y(), p.z()});
+  }
+  return o;
+}
+#endif
+
+// ----- the comparison ------------------------------------------------------------------------
+
+struct Tally {
+  int tried = 0, ok = 0;
+  double seconds = 0, dev_sum = 0, dev_max = 0;
+  std::size_t points = 0;
+  void add(const Outcome& o, const Distance& d) {
+    ++tried;
+    if (!o.ok) return;
+    ++ok;
+    seconds += o.seconds;
+    double worst = 0;
+    for (const auto& p : o.new_points) {
+      const double e = std::abs(d(p));
+      dev_sum += e;
+      worst = std::max(worst, e);
+      ++points;
+    }
+    dev_max = std::max(dev_max, worst);
+    if (std::getenv("S2C_BENCH_VERBOSE")) std::fprintf(stderr, "  %s: max dev %.4f\n", o.note.c_str(), worst);
+  }
+  double mean_dev() const { return points ? dev_sum / double(points) : 0; }
+  double ms() const { return ok ? 1000 * seconds / ok : 0; }
+};
+
+void run_shape(const char* name, const TriangleSoup& shape, double hole_size, const Distance* exact, int holes,
+               std::mt19937& rng) {
+  const char* methods[] = {"rbf", "liepa", "auto", "cgal"};
+  Tally t[4];
+  int made = 0, attempts = 0;
+  while (made < holes && attempts++ < holes * 50) {
+    Cut cut;
+    if (!cut_hole(shape, rng, hole_size, 2000, cut)) continue;
+    ++made;
+    const Distance d = exact ? *exact : removed_faces_distance(shape, cut.removed);
+    t[0].add(fill_ours(cut, repair::FillMethod::rbf), d);
+    t[1].add(fill_ours(cut, repair::FillMethod::liepa), d);
+    t[2].add(fill_ours(cut, repair::FillMethod::automatic), d);
+#ifdef S2C_HAVE_CGAL
+    t[3].add(fill_cgal(cut), d);
+#endif
+  }
+  const double cgal_dev = t[3].mean_dev(), cgal_ms = t[3].ms();
+  for (int m = 0; m < 4; ++m) {
+    if (t[m].tried == 0) continue;
+    std::printf("| %-8s | %-5s | %2d/%-2d | %10.5f | %10.5f | %8.2f |", name, methods[m], t[m].ok, t[m].tried,
+                t[m].mean_dev(), t[m].dev_max, t[m].ms());
+    if (t[3].ok && m < 3 && t[m].ok)
+      std::printf(" %6.2f | %6.2f |\n", cgal_dev > 0 ? t[m].mean_dev() / cgal_dev : 0, t[m].ms() / cgal_ms);
+    else
+      std::printf("   —    |   —    |\n");
+  }
+}
+
+void time_rbf_solve(std::size_t n, std::mt19937& rng) {
+  // n centres from a curved surface patch (half of them offsets), like a hole's constraints.
+  std::vector<Eigen::Vector3d> c;
+  std::vector<double> v;
+  std::uniform_real_distribution<double> u(-1, 1);
+  while (c.size() < n) {
+    Eigen::Vector3d p(u(rng), u(rng), 0);
+    p.z() = 0.3 * p.x() * p.x() - 0.2 * p.y() * p.y();
+    const Eigen::Vector3d nrm = Eigen::Vector3d(-0.6 * p.x(), 0.4 * p.y(), 1).normalized();
+    c.push_back(10 * p);
+    v.push_back(0);
+    c.push_back(10 * p + 0.2 * nrm);
+    v.push_back(0.2);
+  }
+  c.resize(n);
+  v.resize(n);
+  for (const auto solver : {s2c::repair::fill::RbfSolver::nullspace_llt, s2c::repair::fill::RbfSolver::lu}) {
+    double best = 1e300;
+    bool ok = true;
+    for (int rep = 0; rep < (n > 2000 ? 1 : 5); ++rep) {
+      s2c::repair::fill::CubicRbf f;
+      const auto t0 = Clock::now();
+      ok &= f.fit(c, v, solver);
+      best = std::min(best, since(t0));
+    }
+    std::printf("| %5zu | %-13s | %9.2f |%s\n", n, solver == s2c::repair::fill::RbfSolver::lu ? "LU" : "null-space LLT",
+                1000 * best, ok ? "" : " (failed)");
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int holes = 8;
+  std::string real = std::string(S2C_SHARED_DIR) + "/data/real/cad/cgal_fandisk.off";
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--holes") && i + 1 < argc) holes = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--real") && i + 1 < argc) real = argv[++i];
+    else {
+      std::fprintf(stderr, "usage: s2c-bench-holefill [--holes N] [--real MESH]\n");
+      return 2;
+    }
+  }
+  std::mt19937 rng(2024);
+#ifdef S2C_HAVE_CGAL
+  std::printf("CGAL %s: triangulate_refine_and_fair_hole with default parameters\n", CGAL_VERSION_STR);
+#else
+  std::printf("CGAL not found: no comparison column\n");
+#endif
+  std::printf("\nDeviation of the new vertices from the true surface (mm), time per hole (ms); %d holes per shape\n\n", holes);
+  std::printf("| shape    | fill  | ok    | mean dev   | max dev    | ms/hole  | dev/CGAL | time/CGAL |\n");
+  std::printf("|----------|-------|-------|------------|------------|----------|--------|--------|\n");
+  {
+    const double R = 20;
+    const Distance d = [R](const Eigen::Vector3d& p) { return p.norm() - R; };
+    run_shape("sphere", icosphere(R, 5), 6, &d, holes, rng);
+  }
+  {
+    const double R = 10;
+    const double H = 60;
+    const Distance d = [R, H](const Eigen::Vector3d& p) {  // to the closed cylinder (side and caps)
+      const double dr = std::hypot(p.x(), p.y()) - R, dz = std::max(-p.z(), p.z() - H);
+      return dr <= 0 && dz <= 0 ? std::max(dr, dz) : std::hypot(std::max(dr, 0.0), std::max(dz, 0.0));
+    };
+    const auto s = param_surface(96, 60, false, [R, H](double a, double h) {
+      return Eigen::Vector3d(R * std::cos(2 * M_PI * a), R * std::sin(2 * M_PI * a), H * h);
+    });
+    run_shape("cylinder", s, 5, &d, holes, rng);
+  }
+  {
+    const double Rt = 20, r = 7;
+    const Distance d = [Rt, r](const Eigen::Vector3d& p) { return std::hypot(std::hypot(p.x(), p.y()) - Rt, p.z()) - r; };
+    const auto s = param_surface(160, 64, true, [Rt, r](double a, double b) {
+      const double ua = 2 * M_PI * a, vb = 2 * M_PI * b;
+      return Eigen::Vector3d((Rt + r * std::cos(vb)) * std::cos(ua), (Rt + r * std::cos(vb)) * std::sin(ua), r * std::sin(vb));
+    });
+    run_shape("torus", s, 4, &d, holes, rng);
+  }
+  try {
+    const TriangleSoup s = read_soup(real);
+    const double size = 0.06 * bounds(s).diagonal();
+    std::printf("\n(real: %s, hole size %.3g, deviation = distance to the removed faces)\n\n", real.c_str(), size);
+    run_shape("real", s, size, nullptr, holes, rng);
+  } catch (const std::exception& e) {
+    std::printf("real mesh skipped: %s\n", e.what());
+  }
+  std::printf("\nRBF solve (fit of N centres: Φ, factorisation, weights), best of 5, ms\n\n");
+  std::printf("|     N | solver        |        ms |\n|-------|---------------|-----------|\n");
+  for (const std::size_t n : {134u, 268u, 524u, 1000u, 1048u, 5000u}) time_rbf_solve(n, rng);
+  return 0;
+}

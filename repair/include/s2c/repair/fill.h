@@ -1,0 +1,66 @@
+#pragma once
+/// \file Hole filling: Liepa's minimum-weight triangulation + refinement + fairing
+/// (../shared/papers/repair-survey.txt) and the RBF method of ../shared/papers/rbf-hole-filling.txt
+/// (Laplacian rim smoothing, barycentric subdivision, r^3 RBF with on-surface and normal-offset
+/// constraints, gradient projection). `auto` picks per hole.
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "s2c/core/mesh.h"
+#include "s2c/repair/holes.h"
+
+namespace s2c::repair {
+
+enum class FillMethod { automatic, rbf, liepa };
+
+struct FillOptions {
+  FillMethod method = FillMethod::automatic;
+  /// Target edge length of the patch, mm; 0 = the mean length of the hole's rim edges.
+  double edge_length = 0;
+  /// Holes with more rim vertices than this are left open (reported), 0 = no limit.
+  std::size_t max_hole_vertices = 0;
+  /// A patch may not grow beyond this many new vertices (the hole is then left open).
+  std::size_t max_patch_vertices = 2000000;
+  /// The rim is planar when every rim vertex lies within this fraction of the rim diameter of
+  /// the best-fit plane. `automatic` fills a planar rim flat with Liepa when the mesh faces on
+  /// the rim are within 10° of the plane (flat ground) or more than 60° off it (a crease: a
+  /// missing planar face such as a turntable scan's bottom); every other hole gets RBF.
+  double planar_tolerance = 1e-3;
+  /// RBF: passes of Laplacian smoothing (eq. 4, λ = 0.5, each followed by Taubin's μ = -0.53
+  /// step so that clean surfaces do not shrink) over the `rbf_smoothing_rings`-ring around the
+  /// hole, on a copy used for the fit only (the mesh itself is not moved); 0 = off.
+  int rbf_smoothing_passes = 1;
+  int rbf_smoothing_rings = 5;
+  /// RBF: on-surface constraints are the vertices up to this many rings from the rim.
+  int rbf_constraint_rings = 3;
+  /// RBF: normal-offset constraint distance d, as a fraction of the edge length.
+  double rbf_offset = 0.5;
+  /// RBF: gradient projection (eq. 12) stops when a step is shorter than this fraction of the
+  /// edge length (the paper's 0.001 on unit-scale models).
+  double projection_tolerance = 1e-3;
+  /// RBF: more constraints than this switch from one global RBF to local patches blended by a
+  /// partition of unity (see fill/rbf.h).
+  std::size_t rbf_local_limit = 5000;
+};
+
+struct FillResult {
+  FillMethod method = FillMethod::liepa;  ///< what was used for this hole
+  bool filled = false;
+  std::string reason;                     ///< why not, when not filled
+  std::size_t new_vertices = 0, new_faces = 0;
+  double seconds = 0;
+  std::string choice;                     ///< why this method (the auto rule, or fallback)
+  std::size_t rbf_constraints = 0;        ///< RBF centres (on-surface + offset), when RBF ran
+  double rbf_solve_seconds = 0;           ///< RBF system solve, when RBF ran
+};
+
+/// Fills the holes of `soup` in place: appends vertices and faces. Every patch is a manifold
+/// disc attached to its rim, free of self-intersections and of intersections with the mesh
+/// around it; a hole whose patch fails that test is left open with a reason.
+std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& holes,
+                                   const FillOptions& options = {});
+
+const char* to_string(FillMethod m);
+
+}  // namespace s2c::repair

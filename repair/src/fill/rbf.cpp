@@ -1,0 +1,351 @@
+// RBF hole filling after ../shared/papers/rbf-hole-filling.txt (see rbf.h).
+#include "fill/rbf.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <numeric>
+#include <set>
+#include <unordered_map>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Householder>
+#include <Eigen/LU>
+#include <Eigen/QR>
+
+#include "fill/liepa.h"
+
+namespace s2c::repair::fill {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+bool CubicRbf::fit(const std::vector<Eigen::Vector3d>& centers, const std::vector<double>& values, RbfSolver solver) {
+  const int n = static_cast<int>(centers.size());
+  if (n < 5 || values.size() != centers.size()) return false;
+  // Centre and scale to a unit box: keeps Φ (∝ r³) and the linear block comparable.
+  Eigen::Vector3d lo = centers[0], hi = centers[0];
+  for (const auto& c : centers) {
+    lo = lo.cwiseMin(c);
+    hi = hi.cwiseMax(c);
+  }
+  shift_ = 0.5 * (lo + hi);
+  const double extent = (hi - lo).maxCoeff();
+  if (!(extent > 0)) return false;
+  scale_ = 1.0 / extent;
+  c_.resize(3, n);
+  for (int i = 0; i < n; ++i) c_.col(i) = (centers[i] - shift_) * scale_;
+  const Eigen::Map<const Eigen::VectorXd> h(values.data(), n);
+
+  Eigen::MatrixXd phi(n, n);
+  for (int j = 0; j < n; ++j) {
+    phi(j, j) = 0;
+    for (int i = j + 1; i < n; ++i) {
+      const double r = (c_.col(i) - c_.col(j)).norm();
+      phi(i, j) = phi(j, i) = r * r * r;
+    }
+  }
+  Eigen::MatrixXd P(n, 4);
+  P.col(0).setOnes();
+  P.rightCols(3) = c_.transpose();
+
+  if (solver == RbfSolver::lu) {
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n + 4, n + 4);
+    A.topLeftCorner(n, n) = phi;
+    A.topRightCorner(n, 4) = P;
+    A.bottomLeftCorner(4, n) = P.transpose();
+    Eigen::VectorXd b = Eigen::VectorXd::Zero(n + 4);
+    b.head(n) = h;
+    const Eigen::PartialPivLU<Eigen::MatrixXd> lu(A);
+    const Eigen::VectorXd x = lu.solve(b);
+    // PartialPivLU does not report singularity: check the residual instead.
+    if (!x.allFinite() || (A * x - b).norm() > 1e-8 * (b.norm() + 1)) return false;
+    w_ = x.head(n);
+    p_ = x.tail(4);
+    return true;
+  }
+
+  // Null-space method (rbf.h). Q is applied as its 4 Householder reflectors: O(N²).
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(P);
+  const Eigen::Matrix4d R = qr.matrixQR().topLeftCorner(4, 4).triangularView<Eigen::Upper>();
+  if (std::abs(R.diagonal().prod()) < 1e-14) return false;  // centres in a plane: linear part undetermined
+  const auto Q = qr.householderQ();
+  phi.applyOnTheLeft(Q.adjoint());
+  phi.applyOnTheRight(Q);  // phi = Qᵀ Φ Q
+  Eigen::VectorXd qh = h;
+  qh.applyOnTheLeft(Q.adjoint());
+  Eigen::Ref<Eigen::MatrixXd> K = phi.bottomRightCorner(n - 4, n - 4);
+  const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(K);  // in place: the other blocks stay intact
+  if (llt.info() != Eigen::Success) return false;
+  const Eigen::VectorXd y = llt.solve(qh.tail(n - 4));
+  Eigen::VectorXd z(n);
+  z << Eigen::Vector4d::Zero(), y;
+  w_ = z;
+  w_.applyOnTheLeft(Q);
+  // P p = h - Φ w  ⇒  R p = (Qᵀ h)_{0..3} - (Qᵀ Φ Q)_{0..3, 4..} y.
+  const Eigen::Vector4d rhs = qh.head(4) - phi.topRightCorner(4, n - 4) * y;
+  p_ = R.triangularView<Eigen::Upper>().solve(rhs);
+  return w_.allFinite() && p_.allFinite();
+}
+
+double CubicRbf::value(const Eigen::Vector3d& x) const {
+  const Eigen::Vector3d y = (x - shift_) * scale_;
+  double f = p_[0] + p_.tail(3).dot(y);
+  for (Eigen::Index j = 0; j < c_.cols(); ++j) {
+    const double r = (y - c_.col(j)).norm();
+    f += w_[j] * r * r * r;
+  }
+  return f;
+}
+
+Eigen::Vector3d CubicRbf::gradient(const Eigen::Vector3d& x) const {
+  const Eigen::Vector3d y = (x - shift_) * scale_;
+  Eigen::Vector3d g = p_.tail(3);
+  for (Eigen::Index j = 0; j < c_.cols(); ++j) {
+    const Eigen::Vector3d d = y - c_.col(j);
+    g += (3.0 * w_[j] * d.norm()) * d;  // ∇|d|³ = 3|d| d
+  }
+  return scale_ * g;  // chain rule through the normalisation
+}
+
+// ---------------------------------------------------------------------------------------------
+
+namespace {
+
+double wendland(double r) { return r >= 1 ? 0.0 : std::pow(1 - r, 4) * (4 * r + 1); }
+double wendland_derivative(double r) { return r >= 1 ? 0.0 : -20.0 * r * std::pow(1 - r, 3); }
+
+bool fit_samples(CubicRbf& rbf, const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
+                 const std::vector<int>& which, double offset) {
+  std::vector<Eigen::Vector3d> c;
+  std::vector<double> v;
+  for (int i : which) {
+    c.push_back(points[i]);
+    v.push_back(0);
+    if (normals[i].squaredNorm() > 0) {
+      c.push_back(points[i] + offset * normals[i]);
+      v.push_back(offset);
+    }
+  }
+  return rbf.fit(c, v) || rbf.fit(c, v, RbfSolver::lu);
+}
+
+}  // namespace
+
+bool HoleSurface::fit(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
+                      double offset, const std::vector<Eigen::Vector3d>& cover, std::size_t local_limit,
+                      std::string& why) {
+  constraints_ = points.size();
+  for (const auto& n : normals) constraints_ += n.squaredNorm() > 0;
+  locals_.clear();
+  std::vector<int> all(points.size());
+  std::iota(all.begin(), all.end(), 0);
+  if (constraints_ <= local_limit) {
+    if (!fit_samples(global_, points, normals, all, offset)) {
+      why = "RBF system is singular";
+      return false;
+    }
+    return true;
+  }
+  // Partition of unity over a bisection of the box around constraints and patch (rbf.h).
+  constexpr std::size_t kLeaf = 600, kMin = 150, kMax = 1000;
+  Eigen::Vector3d lo = points[0], hi = points[0];
+  for (const auto* set : {&points, &cover})
+    for (const auto& p : *set) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+  struct Cell {
+    Eigen::Vector3d lo, hi;
+    std::vector<int> pts;
+    bool covers = false;
+  };
+  std::vector<Cell> stack{{lo, hi, all, !cover.empty()}};
+  while (!stack.empty()) {
+    Cell cell = std::move(stack.back());
+    stack.pop_back();
+    if (cell.pts.empty() && !cell.covers) continue;
+    if (cell.pts.size() > kLeaf) {
+      int axis;
+      (cell.hi - cell.lo).maxCoeff(&axis);
+      const double mid = 0.5 * (cell.lo[axis] + cell.hi[axis]);
+      Cell a{cell.lo, cell.hi, {}, false}, b{cell.lo, cell.hi, {}, false};
+      a.hi[axis] = mid;
+      b.lo[axis] = mid;
+      for (int i : cell.pts) (points[i][axis] <= mid ? a : b).pts.push_back(i);
+      for (const auto& q : cover) {
+        if ((q.array() >= a.lo.array()).all() && (q.array() <= a.hi.array()).all()) a.covers = true;
+        if ((q.array() >= b.lo.array()).all() && (q.array() <= b.hi.array()).all()) b.covers = true;
+      }
+      stack.push_back(std::move(a));
+      stack.push_back(std::move(b));
+      continue;
+    }
+    Local local;
+    local.center = 0.5 * (cell.lo + cell.hi);
+    local.radius = 0.75 * (cell.hi - cell.lo).norm();
+    if (!(local.radius > 0)) continue;
+    // Nearest points to the centre: everything in the support, at least kMin, at most kMax.
+    std::vector<std::pair<double, int>> by_distance;
+    for (int i : all) by_distance.push_back({(points[i] - local.center).norm(), i});
+    std::sort(by_distance.begin(), by_distance.end());
+    std::vector<int> chosen;
+    for (const auto& [d, i] : by_distance) {
+      if (chosen.size() >= kMax || (chosen.size() >= kMin && d > local.radius)) break;
+      chosen.push_back(i);
+    }
+    if (!fit_samples(local.rbf, points, normals, chosen, offset)) {
+      why = "local RBF system is singular";
+      return false;
+    }
+    locals_.push_back(std::move(local));
+  }
+  if (locals_.empty()) {
+    why = "no local RBF patch";
+    return false;
+  }
+  return true;
+}
+
+double HoleSurface::value(const Eigen::Vector3d& x) const {
+  if (locals_.empty()) return global_.value(x);
+  double sum = 0, weight = 0;
+  for (const auto& l : locals_) {
+    const double w = wendland((x - l.center).norm() / l.radius);
+    if (w > 0) {
+      sum += w * l.rbf.value(x);
+      weight += w;
+    }
+  }
+  return weight > 0 ? sum / weight : std::numeric_limits<double>::quiet_NaN();
+}
+
+Eigen::Vector3d HoleSurface::gradient(const Eigen::Vector3d& x) const {
+  if (locals_.empty()) return global_.gradient(x);
+  // f = Σ wᵢ fᵢ / Σ wᵢ  ⇒  ∇f = (Σ (∇wᵢ fᵢ + wᵢ ∇fᵢ) - f Σ ∇wᵢ) / Σ wᵢ.
+  double sw = 0, swf = 0;
+  Eigen::Vector3d sgw = Eigen::Vector3d::Zero(), sgwf = Eigen::Vector3d::Zero();
+  for (const auto& l : locals_) {
+    const Eigen::Vector3d d = x - l.center;
+    const double dist = d.norm(), r = dist / l.radius;
+    const double w = wendland(r);
+    if (w <= 0) continue;
+    const Eigen::Vector3d gw = dist > 0 ? Eigen::Vector3d(wendland_derivative(r) / (l.radius * dist) * d) : Eigen::Vector3d::Zero();
+    const double fi = l.rbf.value(x);
+    sw += w;
+    swf += w * fi;
+    sgw += gw;
+    sgwf += gw * fi + w * l.rbf.gradient(x);
+  }
+  if (!(sw > 0)) return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  return (sgwf - (swf / sw) * sgw) / sw;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, const HoleShape& shape,
+              const FillOptions& options, RbfStats& stats, std::string& why) {
+  // 1. Rings around the hole by breadth-first search over mesh edges (ring 0 = the rim).
+  const int rings = std::max({options.rbf_smoothing_rings, options.rbf_constraint_rings, 0});
+  std::unordered_map<int, int> ring;
+  std::vector<int> frontier;
+  for (int g : patch.rim)
+    if (ring.emplace(g, 0).second) frontier.push_back(g);
+  for (int r = 1; r <= rings && !frontier.empty(); ++r) {
+    std::vector<int> next;
+    for (int v : frontier)
+      for (int u : index.neighbours(soup, v))
+        if (ring.emplace(u, r).second) next.push_back(u);
+    frontier.swap(next);
+  }
+  // 2. Laplacian smoothing (eq. 4, uniform weights) of rings 1..5 on a copy; the rim stays
+  //    where it is because the patch must meet it exactly. Taubin's μ step after each λ step
+  //    removes the shrinkage that would otherwise pull the fitted surface off a clean one.
+  std::unordered_map<int, Eigen::Vector3d> pos;
+  for (const auto& [v, r] : ring) pos[v] = soup.vertices[v];
+  const auto at = [&](int v) -> const Eigen::Vector3d& {
+    const auto it = pos.find(v);
+    return it != pos.end() ? it->second : soup.vertices[v];
+  };
+  std::vector<int> movable;
+  for (const auto& [v, r] : ring)
+    if (r >= 1 && r <= options.rbf_smoothing_rings) movable.push_back(v);
+  std::sort(movable.begin(), movable.end());
+  std::unordered_map<int, std::vector<int>> nbrs;
+  for (int v : movable) nbrs[v] = index.neighbours(soup, v);
+  for (int pass = 0; pass < options.rbf_smoothing_passes; ++pass)
+    for (const double step : {0.5, -0.53}) {
+      std::vector<Eigen::Vector3d> next(movable.size());
+      for (std::size_t i = 0; i < movable.size(); ++i) {
+        const auto& list = nbrs[movable[i]];
+        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+        for (int u : list) mean += at(u);
+        next[i] = list.empty() ? at(movable[i]) : Eigen::Vector3d(at(movable[i]) + step * (mean / double(list.size()) - at(movable[i])));
+      }
+      for (std::size_t i = 0; i < movable.size(); ++i) pos[movable[i]] = next[i];
+    }
+  // 3. Constraints: the vertices of rings 0..3 (value 0) and their normal offsets (value d).
+  //    Normals are area-weighted from the smoothed positions, oriented like the mesh.
+  std::vector<Eigen::Vector3d> points, normals;
+  std::set<std::array<double, 3>> seen;  // different vertices at one position: one constraint
+  std::vector<int> samples;
+  for (const auto& [v, r] : ring)
+    if (r <= options.rbf_constraint_rings) samples.push_back(v);
+  std::sort(samples.begin(), samples.end());
+  for (int v : samples) {
+    const Eigen::Vector3d p = at(v);
+    if (!seen.insert({p.x(), p.y(), p.z()}).second) continue;
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    for (int f : index.faces_of(v)) {
+      const auto& t = soup.faces[f];
+      n += (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0]));
+    }
+    points.push_back(p);
+    normals.push_back(n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero());
+  }
+  // 4. Initial patch: minimum-weight triangulation refined to the target density (the paper's
+  //    barycentric subdivision, done with Liepa's density rule so it works for non-convex
+  //    holes too), faired with a C1 join so that the projection starts near the surface.
+  if (!triangulate(soup, index, patch, why) || !refine(index, patch, options.max_patch_vertices, why) ||
+      !fair(soup, index, patch, true, why))
+    return false;
+  std::vector<Eigen::Vector3d> cover(patch.points.begin() + patch.rim_size(), patch.points.end());
+  // 5. The implicit surface.
+  const auto t0 = std::chrono::steady_clock::now();
+  HoleSurface surface;
+  if (!surface.fit(points, normals, options.rbf_offset * shape.edge, cover, options.rbf_local_limit, why)) return false;
+  stats.solve_seconds = seconds_since(t0);
+  stats.constraints = surface.constraints();
+  stats.local_patches = surface.local_patches();
+  // 6. Gradient projection (eq. 12) of each new vertex until a step is below the tolerance.
+  const auto t1 = std::chrono::steady_clock::now();
+  const double tol = options.projection_tolerance * shape.edge;
+  for (int l = patch.rim_size(); l < patch.size(); ++l) {
+    Eigen::Vector3d x = patch.points[l];
+    bool converged = false;
+    for (int it = 0; it < 50 && !converged; ++it) {
+      const double f = surface.value(x);
+      const Eigen::Vector3d g = surface.gradient(x);
+      const double gg = g.squaredNorm();
+      if (!std::isfinite(f) || !(gg > 0) || !std::isfinite(gg)) break;
+      const Eigen::Vector3d step = (f / gg) * g;
+      x -= step;
+      converged = step.norm() < tol;
+    }
+    if (!converged || (x - patch.points[l]).norm() > shape.diameter) {
+      why = "gradient projection did not converge";
+      return false;
+    }
+    patch.points[l] = x;
+  }
+  stats.project_seconds = seconds_since(t1);
+  return true;
+}
+
+}  // namespace s2c::repair::fill

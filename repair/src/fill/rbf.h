@@ -1,0 +1,87 @@
+#pragma once
+// The implicit surface of ../shared/papers/rbf-hole-filling.txt: f(x) = Σ w_j |x - c_j|³ + p0 + p·x
+// (eqs. 5, 6, 10) with on-surface constraints f = 0 and normal-offset constraints f = d, and the
+// gradient projection of the patch vertices onto f = 0 (eqs. 11, 12).
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "fill/patch.h"
+#include "s2c/repair/fill.h"
+
+namespace s2c::repair::fill {
+
+enum class RbfSolver {
+  /// Null-space method: with P = Q [R; 0] (Householder QR of the N×4 polynomial block),
+  /// w = Z y for Z = the last N-4 columns of Q, and Zᵀ Φ Z y = Zᵀ h. r³ is conditionally
+  /// positive definite of order 2, so Zᵀ Φ Z is SPD: Cholesky (LLT), N³/3 flops.
+  nullspace_llt,
+  /// The paper's (N+4)² saddle-point system (eq. 9) by LU with partial pivoting, 2N³/3 flops.
+  /// (Not LDLT: the system is indefinite and Eigen's LDLT fails on it without saying so.)
+  lu,
+};
+
+/// One global cubic RBF (eq. 5–9). Coordinates are centred and scaled to a unit box inside.
+class CubicRbf {
+ public:
+  /// Fits f(centers[i]) = values[i]. \return false when the system is singular (e.g.
+  /// coincident centres, or all centres in one plane with the linear part undetermined).
+  bool fit(const std::vector<Eigen::Vector3d>& centers, const std::vector<double>& values,
+           RbfSolver solver = RbfSolver::nullspace_llt);
+  double value(const Eigen::Vector3d& x) const;
+  /// ∇f (eq. 11).
+  Eigen::Vector3d gradient(const Eigen::Vector3d& x) const;
+  std::size_t size() const { return static_cast<std::size_t>(c_.cols()); }
+
+ private:
+  Eigen::Vector3d shift_ = Eigen::Vector3d::Zero();
+  double scale_ = 1;                              // normalised = (x - shift) * scale
+  Eigen::Matrix3Xd c_;                            // 3 by #N, normalised centres (contiguous points)
+  Eigen::VectorXd w_;                             // #N weights
+  Eigen::Vector4d p_ = Eigen::Vector4d::Zero();   // p0, p1, p2, p3 (normalised coordinates)
+};
+
+/// The hole's implicit surface: one CubicRbf up to `local_limit` constraints; beyond, a
+/// partition of unity of local CubicRbfs (the box around the constraints and the patch is split
+/// at the middle of its longest side until a cell holds at most 600 on-surface points; each
+/// cell fits its nearest ≤ 1000 points, at least 150, and is blended with the Wendland weight
+/// (1-r)⁴(4r+1), r = distance to the cell centre / (0.75 · cell diagonal), which covers the cell).
+class HoleSurface {
+ public:
+  /// points/normals: on-surface samples and unit normals (zero normal: no offset point);
+  /// offset: distance of the normal-offset points, mm; cover: points f must be defined at.
+  bool fit(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
+           double offset, const std::vector<Eigen::Vector3d>& cover, std::size_t local_limit,
+           std::string& why);
+  /// NaN outside every local patch.
+  double value(const Eigen::Vector3d& x) const;
+  Eigen::Vector3d gradient(const Eigen::Vector3d& x) const;
+  std::size_t constraints() const { return constraints_; }
+  std::size_t local_patches() const { return locals_.size(); }
+
+ private:
+  struct Local {
+    Eigen::Vector3d center;
+    double radius = 0;
+    CubicRbf rbf;
+  };
+  CubicRbf global_;
+  std::vector<Local> locals_;
+  std::size_t constraints_ = 0;
+};
+
+struct RbfStats {
+  std::size_t constraints = 0;   ///< on-surface + offset centres
+  std::size_t local_patches = 0; ///< 0: one global RBF
+  double solve_seconds = 0;
+  double project_seconds = 0;
+};
+
+/// The RBF fill of one hole into `patch` (rim and points set): smoothing of the rim region,
+/// initial patch, fit, gradient projection. \return false with `why` on failure.
+bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, const HoleShape& shape,
+              const FillOptions& options, RbfStats& stats, std::string& why);
+
+}  // namespace s2c::repair::fill

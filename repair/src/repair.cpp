@@ -1,0 +1,296 @@
+// The repair driver: surface repair when it suffices, volumetric repair when it does not.
+#include "s2c/repair/repair.h"
+
+#include <chrono>
+#include <cmath>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "s2c/core/errors.h"
+#include "s2c/repair/defects.h"
+#include "s2c/repair/gaps.h"
+#include "s2c/repair/holes.h"
+#include "soup_topology.h"
+
+namespace s2c::repair {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// Adds the time since t0 to rep.seconds.key (steps can run more than once).
+void add_seconds(nlohmann::json& rep, const char* key, Clock::time_point t0) {
+  auto& slot = rep["seconds"][key];
+  slot = (slot.is_number() ? slot.get<double>() : 0.0) + since(t0);
+}
+
+nlohmann::json clean_json(const CleanStats& c) {
+  return {{"duplicate_faces_removed", c.duplicate_faces_removed},
+          {"degenerate_faces_removed", c.degenerate_faces_removed},
+          {"tiny_components_removed", c.tiny_components_removed},
+          {"unreferenced_vertices_removed", c.unreferenced_vertices_removed},
+          {"faces_flipped", c.faces_flipped},
+          {"edge_manifold", c.edge_manifold}};
+}
+
+/// Removes the faces on non-manifold edges and, optionally, the faces of intersecting pairs with
+/// their edge neighbours: what is left is edge-manifold, and the holes this cuts are filled like
+/// any other hole (MeshFix's strategy: cut out what is wrong, then patch).
+std::size_t cut_out_bad_faces(TriangleSoup& soup, bool self_intersections) {
+  std::vector<char> drop(soup.faces.size(), 0);
+  const auto edges = edge_faces(soup);
+  for (const auto& [key, faces] : edges)
+    if (faces.size() > 2)
+      for (int f : faces) drop[f] = 1;
+  if (self_intersections) {
+    for (const auto& [a, b] : self_intersecting_pairs(soup)) drop[a] = drop[b] = 1;
+    // One ring of neighbours too: the patch then starts from a rim that is clear of the crossing.
+    std::vector<char> grown = drop;
+    for (const auto& [key, faces] : edges) {
+      bool any = false;
+      for (int f : faces) any |= drop[f] != 0;
+      if (any)
+        for (int f : faces) grown[f] = 1;
+    }
+    drop.swap(grown);
+  }
+  std::size_t w = 0, removed = 0;
+  for (std::size_t fi = 0; fi < soup.faces.size(); ++fi) {
+    if (drop[fi]) {
+      ++removed;
+      continue;
+    }
+    soup.faces[w++] = soup.faces[fi];
+  }
+  soup.faces.resize(w);
+  return removed;
+}
+
+/// Gap closing and hole filling on an edge-manifold soup.
+void close_and_fill(TriangleSoup& soup, const RepairOptions& o, nlohmann::json& rep, int round) {
+  auto t0 = Clock::now();
+  GapOptions go;
+  go.tolerance = o.gap_tolerance;
+  const GapStats g = close_gaps(soup, go);
+  if (round == 0)
+    rep["gaps"] = {{"contractions", g.contractions}, {"edge_splits", g.edge_splits}, {"max_distance_mm", g.max_distance}};
+  add_seconds(rep, "gaps", t0);
+  if (g.contractions > 0) clean(soup);  // contractions can leave unreferenced vertices and slivers
+  if (!o.fill_holes) return;
+  t0 = Clock::now();
+  HoleStats hs;
+  const std::vector<Hole> holes = find_holes(soup, &hs);
+  const std::vector<FillResult> filled = fill_holes(soup, holes, o.fill);
+  nlohmann::json list = nlohmann::json::array();
+  std::size_t n_filled = 0;
+  for (std::size_t i = 0; i < filled.size(); ++i) {
+    const auto& f = filled[i];
+    n_filled += f.filled;
+    list.push_back({{"rim_vertices", holes[i].loop.size()},
+                    {"origin", holes[i].origin == Hole::Origin::nested ? "nested" : "single"},
+                    {"diameter_mm", holes[i].diameter},
+                    {"method", to_string(f.method)},
+                    {"filled", f.filled},
+                    {"reason", f.reason},
+                    {"new_faces", f.new_faces},
+                    {"seconds", f.seconds}});
+  }
+  rep["holes"].push_back({{"round", round}, {"boundary_edges", hs.boundary_edges}, {"single", hs.single_holes},
+                          {"nested", hs.nested_holes}, {"common_points", hs.common_points},
+                          {"to_fill", hs.holes_out}, {"filled", n_filled}, {"list", list}});
+  add_seconds(rep, "holes", t0);
+  clean(soup);  // filled components may now be closed: orient them outward
+}
+
+/// Cleaning, cutting out non-manifold and self-intersecting faces, gap closing, hole filling,
+/// in up to three rounds. Returns the check of the result.
+CheckResult surface_repair(TriangleSoup& soup, const RepairOptions& o, nlohmann::json& rep) {
+  auto t0 = Clock::now();
+  const CleanStats c = clean(soup);
+  rep["clean"] = clean_json(c);
+  rep["seconds"]["clean"] = since(t0);
+  rep["holes"] = nlohmann::json::array();
+  CheckResult check;
+  for (int round = 0; round < 3; ++round) {
+    const bool cut_intersections = round > 0;
+    const std::size_t cut = cut_out_bad_faces(soup, cut_intersections);
+    if (cut > 0) {
+      rep["cut_faces"].push_back({{"round", round}, {"faces", cut}, {"self_intersections", cut_intersections}});
+      clean(soup);
+    }
+    if (soup.faces.empty()) break;
+    close_and_fill(soup, o, rep, round);
+    check = check_mesh(soup);
+    if (check.cad_ready || check.self_intersections == 0) break;
+  }
+  return check;
+}
+
+nlohmann::json volumetric_json(const VolumetricOptions& vo, const VolumetricStats& st) {
+  return {{"voxel_mm", st.voxel},
+          {"band_voxels", vo.band},
+          {"interp", to_string(vo.interp)},
+          {"sign", to_string(vo.sign)},
+          {"extract", to_string(vo.extract)},
+          {"band_vertices", st.band_vertices},
+          {"blocks", st.blocks},
+          {"grid_bytes", st.bytes},
+          {"triangles", st.triangles},
+          {"clamped_edges", st.clamped_edges},
+          {"seconds_field", st.seconds_field},
+          {"seconds_sign", st.seconds_sign},
+          {"seconds_extract", st.seconds_extract},
+          {"attempts", st.attempts},
+          {"final_band_voxels", st.band},
+          {"shell_mm", st.shell}};
+}
+
+/// Volumetric remeshing of the first candidate input that gives a closed surface free of
+/// self-intersections; the vector interpolation, then the linear one (the closest-point segment
+/// can fold a triangle where a thin wall puts A and B on different sheets).
+TriangleSoup volumetric_repair(const std::vector<const TriangleSoup*>& inputs, const RepairOptions& o,
+                               nlohmann::json& rep) {
+  auto t0 = Clock::now();
+  TriangleSoup out;
+  rep["volumetric"] = nlohmann::json::array();
+  for (std::size_t k = 0; k < inputs.size(); ++k) {
+    const TriangleSoup& soup = *inputs[k];
+    VolumetricOptions vo = o.volumetric;
+    const Bounds b = bounds(soup);
+    if (!(vo.voxel > 0) && vo.resolution <= 0) vo.voxel = (b.max - b.min).maxCoeff() / 320;
+    std::vector<Interp> interps = {vo.interp};
+    if (vo.interp != Interp::linear) interps.push_back(Interp::linear);
+    bool good = false;
+    for (Interp interp : interps) {
+      vo.interp = interp;
+      VolumetricStats st;
+      out = volumetric_remesh(soup, vo, &st);
+      nlohmann::json j = volumetric_json(vo, st);
+      j["input"] = k == 0 && inputs.size() > 1 ? "surface-repaired" : "input";
+      j["clean"] = clean_json(clean(out));  // loose specks of the band
+      const std::size_t pairs = self_intersecting_pairs(out).size();
+      j["self_intersections"] = pairs;
+      rep["volumetric"].push_back(j);
+      rep["voxel_mm"] = st.voxel;
+      if (pairs == 0) {
+        good = true;
+        break;
+      }
+    }
+    if (good && rep["volumetric"].back()["shell_mm"].get<double>() == 0) break;
+    if (good && k + 1 == inputs.size()) break;
+  }
+  rep["seconds"]["volumetric"] = since(t0);
+  t0 = Clock::now();
+  const double voxel = rep["voxel_mm"].get<double>();
+  if (o.decimate_tolerance_voxels > 0) {
+    // Quadric decimation does not look at the far side of thin walls: a collapse can push a face
+    // through it. Such faces are cut out and the holes patched, as in surface repair; if that
+    // does not give a CAD-ready mesh, a smaller tolerance is tried, and finally none.
+    nlohmann::json tries = nlohmann::json::array();
+    for (double factor : {1.0, 0.3}) {
+      TriangleSoup dec = out;
+      const double tol = factor * o.decimate_tolerance_voxels * voxel;
+      const std::size_t removed = decimate(dec, tol);
+      std::size_t pairs = self_intersecting_pairs(dec).size();
+      nlohmann::json t = {{"tolerance_mm", tol}, {"faces_removed", removed}, {"faces", dec.faces.size()},
+                          {"self_intersections", pairs}};
+      bool ok = pairs == 0;
+      if (!ok) {
+        nlohmann::json fix;
+        for (int round = 0; round < 2 && !ok; ++round) {
+          cut_out_bad_faces(dec, true);
+          clean(dec);
+          close_and_fill(dec, o, fix, round + 1);
+          ok = check_mesh(dec).cad_ready;
+        }
+        t["patched"] = ok;
+      }
+      tries.push_back(t);
+      if (ok) {
+        out = std::move(dec);
+        break;
+      }
+    }
+    rep["decimate"] = tries;
+  }
+  rep["seconds"]["decimate"] = since(t0);
+  return out;
+}
+
+}  // namespace
+
+const char* to_string(Strategy s) {
+  switch (s) {
+    case Strategy::surface: return "surface";
+    case Strategy::volumetric: return "volumetric";
+    default: return "auto";
+  }
+}
+
+RepairResult repair_mesh(const TriangleSoup& input, const RepairOptions& o) {
+  if (input.faces.empty()) throw InvalidInput("the mesh has no faces");
+  RepairResult res;
+  nlohmann::json& rep = res.report;
+  auto t0 = Clock::now();
+  const DefectReport before = find_defects(input);
+  rep["defects_before"] = to_json(before);
+  rep["seconds"]["defects_before"] = since(t0);
+  if (before.check.cad_ready && o.strategy != Strategy::volumetric) {
+    res.mesh = input;
+    res.path = "unchanged";
+    res.cad_ready = true;
+    rep["path"] = res.path;
+    rep["defects_after"] = rep["defects_before"];
+    return res;
+  }
+
+  TriangleSoup surface = input;
+  bool surface_ok = false;
+  CheckResult surface_check;
+  if (o.strategy != Strategy::volumetric) {
+    nlohmann::json srep;
+    surface_check = surface_repair(surface, o, srep);
+    surface_ok = surface_check.cad_ready;
+    rep["surface"] = srep;
+  }
+  if (surface_ok) {
+    res.mesh = std::move(surface);
+    res.path = "surface";
+  } else if (o.strategy == Strategy::surface) {
+    res.mesh = std::move(surface);
+    res.path = "surface";
+    res.problem = "surface repair could not make the mesh CAD-ready (" +
+                  (surface_check.problems.empty() ? std::string("unknown") : surface_check.problems.front()) +
+                  "); try --strategy auto or volumetric";
+    rep["path"] = res.path;
+    return res;
+  } else {
+    // Filled holes help the volumetric step (the band need not bridge them); the winding number
+    // does not mind what the surface step left behind.
+    const bool use_surface = rep.contains("surface") && !surface.faces.empty();
+    nlohmann::json vrep;
+    std::vector<const TriangleSoup*> inputs;
+    if (use_surface) inputs.push_back(&surface);
+    inputs.push_back(&input);
+    res.mesh = volumetric_repair(inputs, o, vrep);
+    rep["volumetric_path"] = vrep;
+    res.path = "volumetric";
+  }
+  // Stage files store float coordinates (OpenMesh's PLY writer): judge what will be written.
+  for (auto& v : res.mesh.vertices) v = v.cast<float>().cast<double>();
+  t0 = Clock::now();
+  const DefectReport after = find_defects(res.mesh);
+  rep["defects_after"] = to_json(after);
+  rep["seconds"]["defects_after"] = since(t0);
+  rep["path"] = res.path;
+  res.cad_ready = after.check.cad_ready;
+  if (!res.cad_ready)
+    res.problem = fmt::format("{} repair did not give a CAD-ready mesh: {}", res.path,
+                              after.check.problems.empty() ? "unknown" : after.check.problems.front());
+  return res;
+}
+
+}  // namespace s2c::repair

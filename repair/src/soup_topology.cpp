@@ -1,0 +1,77 @@
+#include "soup_topology.h"
+
+#include <numeric>
+
+#include "s2c/core/predicates.h"
+
+namespace s2c::repair {
+
+std::unordered_map<std::uint64_t, std::vector<int>> edge_faces(const TriangleSoup& soup) {
+  std::unordered_map<std::uint64_t, std::vector<int>> map;
+  map.reserve(soup.faces.size() * 2);
+  for (std::size_t fi = 0; fi < soup.faces.size(); ++fi) {
+    const auto& f = soup.faces[fi];
+    for (int k = 0; k < 3; ++k) map[undirected_key(f[k], f[(k + 1) % 3])].push_back(static_cast<int>(fi));
+  }
+  return map;
+}
+
+std::vector<int> face_components(const TriangleSoup& soup, int& count) {
+  std::vector<int> parent(soup.vertices.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (const auto& f : soup.faces)
+    for (int k = 1; k < 3; ++k) parent[find(f[k])] = find(f[0]);
+  std::unordered_map<int, int> id;
+  std::vector<int> comp(soup.faces.size());
+  for (std::size_t fi = 0; fi < soup.faces.size(); ++fi) {
+    const int root = find(soup.faces[fi][0]);
+    comp[fi] = id.emplace(root, static_cast<int>(id.size())).first->second;
+  }
+  count = static_cast<int>(id.size());
+  return comp;
+}
+
+double face_area(const TriangleSoup& soup, int face) {
+  const auto& f = soup.faces[face];
+  return 0.5 * (soup.vertices[f[1]] - soup.vertices[f[0]]).cross(soup.vertices[f[2]] - soup.vertices[f[0]]).norm();
+}
+
+bool zero_area(const TriangleSoup& soup, int face) {
+  const auto& f = soup.faces[face];
+  if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) return true;
+  const Eigen::Vector3d &a = soup.vertices[f[0]], &b = soup.vertices[f[1]], &c = soup.vertices[f[2]];
+  // Collinear in 3D iff collinear in all three coordinate projections (exact predicates).
+  for (int axis = 0; axis < 3; ++axis) {
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    if (orient2d({a[u], a[v]}, {b[u], b[v]}, {c[u], c[v]}) != 0) return false;
+  }
+  return true;
+}
+
+std::size_t remove_unreferenced(TriangleSoup& soup) {
+  std::vector<int> map(soup.vertices.size(), -1);
+  for (const auto& f : soup.faces)
+    for (int v : f) map[v] = 0;
+  int next = 0;
+  std::vector<Eigen::Vector3d> kept;
+  std::vector<Eigen::Vector3d> kept_normals;
+  const bool normals = soup.normals.size() == soup.vertices.size();
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    if (map[i] < 0) continue;
+    map[i] = next++;
+    kept.push_back(soup.vertices[i]);
+    if (normals) kept_normals.push_back(soup.normals[i]);
+  }
+  const std::size_t removed = soup.vertices.size() - kept.size();
+  for (auto& f : soup.faces)
+    for (int& v : f) v = map[v];
+  soup.vertices = std::move(kept);
+  soup.normals = std::move(kept_normals);
+  return removed;
+}
+
+}  // namespace s2c::repair

@@ -1,0 +1,66 @@
+#pragma once
+// What Marching Cubes and dual contouring share: visiting the complete cells of the sparse band
+// (all eight corners in the band) with their inside mask, and the point where a crossing edge
+// meets the surface.
+#include <array>
+#include <cstdint>
+
+#include "s2c/repair/volumetric.h"
+#include "volumetric/mc_table.h"
+#include "volumetric/sparse_grid.h"
+
+namespace s2c::repair {
+
+struct Cell {
+  Eigen::Vector3i min;  ///< global index of corner 0
+  int mask = 0;         ///< bit c: corner c inside
+  std::array<const SparseGrid::Block*, 8> block;
+  std::array<int, 8> local;
+
+  Eigen::Vector3i corner(int c) const { return min + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1); }
+  bool inside(int c) const { return (mask >> c) & 1; }
+};
+
+/// Calls f(cell) for every complete cell with a sign change, block by block.
+template <class F>
+void for_each_crossing_cell(const SparseGrid& grid, F&& f) {
+  constexpr int S = SparseGrid::kSide;
+  for (std::size_t bi = 0; bi < grid.block_count(); ++bi) {
+    const Eigen::Vector3i bc = grid.block_coords(bi);
+    // The block and its 7 upper neighbours hold every corner of the cells this block owns.
+    const SparseGrid::Block* nb[8];
+    for (int n = 0; n < 8; ++n) nb[n] = grid.find_block(bc + Eigen::Vector3i(n & 1, (n >> 1) & 1, (n >> 2) & 1));
+    for (int li = 0; li < SparseGrid::kCount; ++li) {
+      const Eigen::Vector3i l = SparseGrid::local_coords(li);
+      Cell cell;
+      cell.min = bc * S + l;
+      bool complete = true;
+      for (int c = 0; c < 8 && complete; ++c) {
+        const Eigen::Vector3i q = l + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1);
+        const SparseGrid::Block* blk = nb[(q.x() >= S) | ((q.y() >= S) << 1) | ((q.z() >= S) << 2)];
+        if (!blk) {
+          complete = false;
+          break;
+        }
+        const int qi = SparseGrid::local_index(q);
+        complete = blk->flags[qi] & kInBand;
+        cell.block[c] = blk;
+        cell.local[c] = qi;
+        if (blk->flags[qi] & kInside) cell.mask |= 1 << c;
+      }
+      if (complete && cell.mask != 0 && cell.mask != 255) f(cell);
+    }
+  }
+}
+
+/// Key of the grid edge from global vertex `ijk` along `axis` (20 bits per coordinate).
+inline std::uint64_t grid_edge_key(const Eigen::Vector3i& ijk, int axis) {
+  return std::uint64_t(ijk.x()) | (std::uint64_t(ijk.y()) << 20) | (std::uint64_t(ijk.z()) << 40) |
+         (std::uint64_t(axis) << 60);
+}
+
+/// Where crossing edge `e` of `cell` meets the surface: the VDF paper's closest point to the
+/// segment between the corners' closest surface points, or linear in the signed distance.
+Eigen::Vector3d crossing_point(const SparseGrid& grid, const Cell& cell, int e, Interp interp, VolumetricStats& stats);
+
+}  // namespace s2c::repair

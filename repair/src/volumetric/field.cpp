@@ -1,0 +1,320 @@
+#include "volumetric/field.h"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "s2c/core/distance.h"
+#include "volumetric/winding.h"
+
+namespace s2c::repair {
+
+namespace {
+
+std::vector<Eigen::Vector3i> blocks_near_surface(const TriangleSoup& soup, double radius, const SparseGrid& grid) {
+  const double h = grid.voxel();
+  const Eigen::Vector3d origin = grid.position(Eigen::Vector3i::Zero());
+  const double block_len = h * SparseGrid::kSide;
+  // A block owns vertices [8b, 8b+7]: its centre and the radius of the sphere around its vertices.
+  const double half_diag = 0.5 * std::sqrt(3.0) * h * (SparseGrid::kSide - 1);
+  tbb::enumerable_thread_specific<std::vector<Eigen::Vector3i>> found;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, soup.faces.size(), 256), [&](const auto& range) {
+    auto& out = found.local();
+    for (std::size_t fi = range.begin(); fi != range.end(); ++fi) {
+      const auto& f = soup.faces[fi];
+      const Eigen::Vector3d &a = soup.vertices[f[0]], &b = soup.vertices[f[1]], &c = soup.vertices[f[2]];
+      const Eigen::Vector3d lo = a.cwiseMin(b).cwiseMin(c).array() - radius, hi = a.cwiseMax(b).cwiseMax(c).array() + radius;
+      const Eigen::Vector3i blo = ((lo - origin) / block_len).array().floor().cast<int>();
+      const Eigen::Vector3i bhi = ((hi - origin) / block_len).array().floor().cast<int>();
+      const bool small = (bhi - blo).maxCoeff() <= 1;
+      for (int z = blo.z(); z <= bhi.z(); ++z)
+        for (int y = blo.y(); y <= bhi.y(); ++y)
+          for (int x = blo.x(); x <= bhi.x(); ++x) {
+            const Eigen::Vector3i bc(x, y, z);
+            if (!small) {  // long triangles: skip blocks of their box that they do not come near
+              const Eigen::Vector3d centre = origin + block_len * bc.cast<double>() +
+                                             Eigen::Vector3d::Constant(0.5 * h * (SparseGrid::kSide - 1));
+              if ((closest_point_on_triangle(centre, a, b, c) - centre).norm() > radius + half_diag) continue;
+            }
+            out.push_back(bc);
+          }
+    }
+  });
+  std::vector<Eigen::Vector3i> all;
+  for (auto& v : found) all.insert(all.end(), v.begin(), v.end());
+  std::sort(all.begin(), all.end(), [](const Eigen::Vector3i& p, const Eigen::Vector3i& q) {
+    return SparseGrid::key(p) < SparseGrid::key(q);
+  });
+  all.erase(std::unique(all.begin(), all.end()), all.end());
+  return all;
+}
+
+/// Angle-weighted pseudonormals (Bærentzen & Aanæs 2005): the sign of (p − q)·n at the closest
+/// point q is exact for a closed manifold when n is the face normal inside a face, the sum of the
+/// two face normals on an edge, and the angle-weighted vertex normal at a vertex.
+struct Pseudonormals {
+  std::vector<Eigen::Vector3d> face, vertex;
+  std::unordered_map<std::uint64_t, Eigen::Vector3d> edge;
+
+  static std::uint64_t edge_key(int a, int b) {
+    if (a > b) std::swap(a, b);
+    return (std::uint64_t(a) << 32) | std::uint32_t(b);
+  }
+
+  explicit Pseudonormals(const TriangleSoup& s) : face(s.faces.size()), vertex(s.vertices.size(), Eigen::Vector3d::Zero()) {
+    for (std::size_t i = 0; i < s.faces.size(); ++i) {
+      const auto& f = s.faces[i];
+      Eigen::Vector3d n = (s.vertices[f[1]] - s.vertices[f[0]]).cross(s.vertices[f[2]] - s.vertices[f[0]]);
+      const double len = n.norm();
+      face[i] = len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector3d u = s.vertices[f[(k + 1) % 3]] - s.vertices[f[k]];
+        const Eigen::Vector3d v = s.vertices[f[(k + 2) % 3]] - s.vertices[f[k]];
+        const double nu = u.norm(), nv = v.norm();
+        if (nu > 0 && nv > 0) vertex[f[k]] += std::acos(std::clamp(u.dot(v) / (nu * nv), -1.0, 1.0)) * face[i];
+        edge.try_emplace(edge_key(f[k], f[(k + 1) % 3]), Eigen::Vector3d::Zero()).first->second += face[i];
+      }
+    }
+  }
+
+  /// The pseudonormal at point q of face fi.
+  Eigen::Vector3d at(const TriangleSoup& s, int fi, const Eigen::Vector3d& q) const {
+    const auto& f = s.faces[fi];
+    const Eigen::Vector3d a = s.vertices[f[0]], b = s.vertices[f[1]], c = s.vertices[f[2]];
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    const double area2 = n.squaredNorm();
+    if (!(area2 > 0)) return face[fi];
+    // Barycentric coordinates of q; a coordinate ~0 puts q on the opposite edge.
+    const double wa = (b - q).cross(c - q).dot(n) / area2, wb = (c - q).cross(a - q).dot(n) / area2;
+    const double w[3] = {wa, wb, 1 - wa - wb};
+    const double eps = 1e-9;
+    int zeros = 0, nonzero = -1, zero = -1;
+    for (int k = 0; k < 3; ++k) {
+      if (w[k] <= eps) {
+        ++zeros;
+        zero = k;
+      } else {
+        nonzero = k;
+      }
+    }
+    if (zeros >= 2) return vertex[f[nonzero]];
+    if (zeros == 1) {
+      const auto it = edge.find(edge_key(f[(zero + 1) % 3], f[(zero + 2) % 3]));
+      if (it != edge.end()) return it->second;
+    }
+    return face[fi];
+  }
+};
+
+}  // namespace
+
+void build_vector_field(const TriangleSoup& soup, const SurfaceQuery& query, double radius, SparseGrid& grid,
+                        VolumetricStats& stats) {
+  grid.allocate(blocks_near_surface(soup, radius, grid));
+  const double h = grid.voxel();
+  // Every vertex of a block is within this distance of the block's centre.
+  const double half_diag = 0.5 * std::sqrt(3.0) * h * (SparseGrid::kSide - 1);
+  tbb::enumerable_thread_specific<std::size_t> in_band(0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, grid.block_count(), 4), [&](const auto& range) {
+    auto& count = in_band.local();
+    for (std::size_t bi = range.begin(); bi != range.end(); ++bi) {
+      auto& block = grid.block(bi);
+      const Eigen::Vector3i base = grid.block_coords(bi) * SparseGrid::kSide;
+      const Eigen::Vector3d centre = grid.position(base) + Eigen::Vector3d::Constant(0.5 * h * (SparseGrid::kSide - 1));
+      // The faces that can be within the band of any vertex of this block. When they are few
+      // (CAD meshes, coarse scans), testing them directly beats 512 BVH traversals.
+      const std::vector<int> near = query.faces_within(centre, radius + half_diag);
+      const bool direct = near.size() <= 48;
+      for (int i = 0; i < SparseGrid::kCount; ++i) {
+        const Eigen::Vector3d p = grid.position(base + SparseGrid::local_coords(i));
+        Eigen::Vector3d best;
+        double best_d = radius;
+        bool found = false;
+        if (direct) {
+          for (int fi : near) {
+            const auto& f = soup.faces[fi];
+            const Eigen::Vector3d q = closest_point_on_triangle(p, soup.vertices[f[0]], soup.vertices[f[1]], soup.vertices[f[2]]);
+            const double d = (q - p).norm();
+            if (d <= best_d) {
+              best_d = d;
+              best = q;
+              found = true;
+            }
+          }
+        } else if (const auto hit = query.closest(p, radius)) {
+          best = hit->point;
+          found = true;
+        }
+        if (!found) continue;
+        grid.set_vector(block, i, best - p);
+        block.flags[i] = kInBand;
+        ++count;
+      }
+    }
+  });
+  stats.band_vertices = in_band.combine(std::plus<>());
+  stats.blocks = grid.block_count();
+  stats.bytes = grid.bytes();
+}
+
+namespace {
+
+/// The paper's dot rule per vertex, with pseudonormals.
+void classify_by_dot(const TriangleSoup& soup, const SurfaceQuery& query, SparseGrid& grid) {
+  const Pseudonormals normals(soup);
+  const double h = grid.voxel();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, grid.block_count(), 2), [&](const auto& range) {
+    for (std::size_t bi = range.begin(); bi != range.end(); ++bi) {
+      auto& block = grid.block(bi);
+      const Eigen::Vector3i base = grid.block_coords(bi) * SparseGrid::kSide;
+      for (int i = 0; i < SparseGrid::kCount; ++i) {
+        if (!(block.flags[i] & kInBand)) continue;
+        const Eigen::Vector3d p = grid.position(base + SparseGrid::local_coords(i));
+        // The stored vector is quantised; re-query for the face so the pseudonormal is exact.
+        const auto hit = query.closest(p, grid.vector(block, i).norm() * (1 + 1e-3) + 1e-3 * h);
+        if (hit && (hit->point - p).dot(normals.at(soup, hit->face, hit->point)) > 0) block.flags[i] |= kInside;
+      }
+    }
+  });
+}
+
+struct UnionFind {
+  std::vector<int> parent;
+  int find(int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(int a, int b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+/// The generalised winding number decides inside/outside, but evaluating it at every band vertex
+/// costs ~100× the distance field. The sign cannot change between two neighbouring vertices
+/// unless the surface passes between them, so the band is cut into regions that no surface
+/// separates, and the winding number is evaluated at a few samples per region. Two neighbours are
+/// surely connected when their distances add up to more than their spacing (a crossing point
+/// would be closer to both); otherwise a ray along the grid edge decides. A region whose samples
+/// disagree or sit near w = 1/2 (it leaks through a hole or overlap) gets the winding number at
+/// every vertex, or, with `shell` > 0, becomes a closed shell of that half-thickness around the
+/// surface.
+void classify_by_winding(const TriangleSoup& soup, const SurfaceQuery& query, double shell, SparseGrid& grid,
+                         VolumetricStats& stats) {
+  const WindingNumber winding(soup);
+  const double h = grid.voxel();
+  const std::size_t nb = grid.block_count();
+  constexpr int S = SparseGrid::kSide, N = SparseGrid::kCount;
+  std::vector<std::array<std::int64_t, 3>> next_block(nb);
+  for (std::size_t bi = 0; bi < nb; ++bi)
+    for (int a = 0; a < 3; ++a) next_block[bi][a] = grid.find_index(grid.block_coords(bi) + Eigen::Vector3i::Unit(a));
+  // The +a neighbour of local vertex i of block bi: (block, local) or block -1.
+  auto neighbour = [&](std::size_t bi, int i, int a) -> std::pair<std::int64_t, int> {
+    Eigen::Vector3i l = SparseGrid::local_coords(i);
+    if (++l[a] < S) return {static_cast<std::int64_t>(bi), SparseGrid::local_index(l)};
+    l[a] = 0;
+    return {next_block[bi][a], SparseGrid::local_index(l)};
+  };
+  // Quantisation can shorten each stored distance by up to √3·quantum: keep the test conservative.
+  const double slack = h * (1 + 1e-6) + 2e-4 * h;
+  std::vector<std::uint8_t> linked(nb * N, 0);  // bit a: no surface between it and its +a neighbour
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 2), [&](const auto& range) {
+    for (std::size_t bi = range.begin(); bi != range.end(); ++bi) {
+      const auto& block = grid.block(bi);
+      const Eigen::Vector3i base = grid.block_coords(bi) * S;
+      for (int i = 0; i < N; ++i) {
+        if (!(block.flags[i] & kInBand)) continue;
+        const double d1 = grid.vector(block, i).norm();
+        for (int a = 0; a < 3; ++a) {
+          const auto [nbi, ni] = neighbour(bi, i, a);
+          if (nbi < 0) continue;
+          const auto& other = grid.block(static_cast<std::size_t>(nbi));
+          if (!(other.flags[ni] & kInBand)) continue;
+          bool connected = d1 + grid.vector(other, ni).norm() > slack;
+          if (!connected) {
+            const Eigen::Vector3d p = grid.position(base + SparseGrid::local_coords(i));
+            connected = !query.raycast(p, Eigen::Vector3d::Unit(a), 0, h);
+          }
+          if (connected) linked[bi * N + i] |= std::uint8_t(1u << a);
+        }
+      }
+    }
+  });
+  UnionFind uf;
+  uf.parent.resize(nb * N);
+  for (std::size_t v = 0; v < uf.parent.size(); ++v) uf.parent[v] = static_cast<int>(v);
+  for (std::size_t bi = 0; bi < nb; ++bi)
+    for (int i = 0; i < N; ++i)
+      for (int a = 0; a < 3; ++a)
+        if (linked[bi * N + i] & (1u << a)) {
+          const auto [nbi, ni] = neighbour(bi, i, a);
+          uf.unite(static_cast<int>(bi * N + i), static_cast<int>(nbi * N + ni));
+        }
+  linked = {};
+  // Members of each region, in index order.
+  std::unordered_map<int, std::vector<int>> regions;
+  for (std::size_t bi = 0; bi < nb; ++bi)
+    for (int i = 0; i < N; ++i)
+      if (grid.block(bi).flags[i] & kInBand) regions[uf.find(static_cast<int>(bi * N + i))].push_back(static_cast<int>(bi * N + i));
+  uf.parent = {};
+  auto position = [&](int v) {
+    const std::size_t bi = static_cast<std::size_t>(v) / N;
+    return grid.position(grid.block_coords(bi) * S + SparseGrid::local_coords(v % N));
+  };
+  auto set_inside = [&](int v, bool inside) {
+    if (inside) grid.block(static_cast<std::size_t>(v) / N).flags[v % N] |= kInside;
+  };
+  std::size_t evaluations = 0, mixed = 0;
+  for (const auto& [root, members] : regions) {
+    constexpr std::size_t kSamples = 33;
+    const std::size_t step = std::max<std::size_t>(1, members.size() / kSamples);
+    int in = 0, out = 0, unsure = 0;
+    for (std::size_t k = 0; k < members.size(); k += step) {
+      const double w = winding(position(members[k]));
+      ++evaluations;
+      if (std::abs(w - 0.5) < 0.25) ++unsure;
+      (w >= 0.5 ? in : out)++;
+    }
+    if (unsure == 0 && (in == 0 || out == 0)) {
+      for (int v : members) set_inside(v, in > 0);
+      continue;
+    }
+    ++mixed;
+    if (shell > 0) {
+      // The region leaks from inside to outside through a hole the band cannot bridge: keep a
+      // closed shell of thickness 2·shell around the surface instead (always closed in the band).
+      for (int v : members) {
+        auto& block = grid.block(static_cast<std::size_t>(v) / N);
+        block.flags[v % N] |= kShell;
+        set_inside(v, grid.vector(block, v % N).norm() < shell);
+      }
+      continue;
+    }
+    evaluations += members.size();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, members.size(), 256), [&](const auto& r) {
+      for (std::size_t k = r.begin(); k != r.end(); ++k) set_inside(members[k], winding(position(members[k])) >= 0.5);
+    });
+  }
+  stats.sign_queries = evaluations;
+  stats.sign_regions = regions.size();
+  stats.sign_regions_mixed = mixed;
+}
+
+}  // namespace
+
+void classify_inside(const TriangleSoup& soup, const SurfaceQuery& query, SignMode mode, double shell,
+                     SparseGrid& grid, VolumetricStats& stats) {
+  grid.set_shell(shell);
+  if (mode == SignMode::dot) {
+    classify_by_dot(soup, query, grid);
+    stats.sign_queries = stats.band_vertices;
+  } else {
+    classify_by_winding(soup, query, shell, grid, stats);
+  }
+}
+
+}  // namespace s2c::repair

@@ -1,0 +1,18 @@
+#pragma once
+// Marching Cubes over the sparse band. Each crossing edge gets one vertex, shared by the four
+// cells around it, so the output is a closed manifold wherever the band covers the surface.
+#include "s2c/core/mesh.h"
+#include "s2c/repair/volumetric.h"
+#include "volumetric/sparse_grid.h"
+
+namespace s2c::repair {
+
+TriangleSoup marching_cubes(const SparseGrid& grid, Interp interp, VolumetricStats& stats);
+
+/// The paper's edge point: the parameter λ ∈ [0, 1] of the point of edge V1→V2 closest to the
+/// segment A→B (A, B the closest surface points of V1, V2). Returns false when the edge and AB are
+/// parallel (no unique point); λ is then untouched.
+bool vector_edge_parameter(const Eigen::Vector3d& v1, const Eigen::Vector3d& v2, const Eigen::Vector3d& a,
+                           const Eigen::Vector3d& b, double& lambda);
+
+}  // namespace s2c::repair

@@ -1,0 +1,116 @@
+#include "s2c/repair/volumetric.h"
+
+#include <chrono>
+#include <cmath>
+#include <unordered_map>
+
+#include <fmt/format.h>
+
+#include "s2c/core/distance.h"
+#include "s2c/core/errors.h"
+#include "volumetric/dual_contouring.h"
+#include "volumetric/field.h"
+#include "volumetric/marching_cubes.h"
+
+namespace s2c::repair {
+
+namespace {
+
+std::size_t open_edges(const TriangleSoup& s) {
+  std::unordered_map<std::uint64_t, int> count;
+  for (const auto& f : s.faces)
+    for (int k = 0; k < 3; ++k) {
+      int a = f[k], b = f[(k + 1) % 3];
+      if (a > b) std::swap(a, b);
+      ++count[(std::uint64_t(a) << 32) | std::uint32_t(b)];
+    }
+  std::size_t open = 0;
+  for (const auto& [e, n] : count) open += n == 1;
+  return open;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+TriangleSoup volumetric_remesh(const TriangleSoup& input, const VolumetricOptions& options, VolumetricStats* stats_out) {
+  if (input.faces.empty()) throw InvalidInput("volumetric repair: the mesh has no faces");
+  VolumetricStats stats;
+  const Bounds box = bounds(input);
+  const double longest = (box.max - box.min).maxCoeff();
+  if (!(longest > 0)) throw InvalidInput("volumetric repair: the mesh has no extent (all vertices coincide)");
+  double h = options.voxel;
+  if (!(h > 0)) h = longest / (options.resolution > 0 ? options.resolution : 256);
+  const SurfaceQuery query(input);  // one BVH for the field, the sign and the DC normals
+  stats.voxel = h;
+  // Attempts, until the surface is closed: the band as asked; a wider band that can bridge wider
+  // holes; finally a closed shell around whatever the band cannot decide (always closes).
+  struct Attempt {
+    double band, shell;
+  };
+  const double band0 = std::max(options.band, std::sqrt(3.0) + 0.05);
+  // The shell sits 0.6 voxel off the surface: its cells reach √3 voxels further, so widen the band.
+  const Attempt attempts[] = {{band0, 0.0}, {2.5 * band0, 0.0}, {band0 + 1.5, 0.6 * h}};
+  TriangleSoup out;
+  for (const Attempt& attempt : attempts) {
+    if (!options.retry && attempt.band != band0) break;
+    if (!options.retry && attempt.shell > 0) break;
+    const double radius = attempt.band * h;
+    // Edge keys pack 20 bits per axis; beyond that the voxel is far too small for the part anyway.
+    const double cells = longest / h + 2 * attempt.band + 4;
+    if (cells > (1 << 20) - 16)
+      throw ProcessingError(fmt::format("volumetric repair: voxel {:.3g} mm gives {:.0f} cells across a {:.3g} mm part; "
+                                        "use a larger --voxel", h, cells, longest));
+    // CAD faces sit at round coordinates; a grid plane through a face puts vertices exactly on the
+    // surface, where inside/outside is a coin toss. An odd fraction of a voxel keeps them apart.
+    const Eigen::Vector3d origin = box.min - Eigen::Vector3d::Constant((std::ceil(attempt.band) + 2 + 0.3719) * h);
+    SparseGrid grid(origin, h, radius);
+    VolumetricStats st;
+    st.voxel = h;
+    auto t0 = std::chrono::steady_clock::now();
+    build_vector_field(input, query, radius, grid, st);
+    st.seconds_field = seconds_since(t0);
+    t0 = std::chrono::steady_clock::now();
+    classify_inside(input, query, options.sign, attempt.shell, grid, st);
+    st.seconds_sign = seconds_since(t0);
+    t0 = std::chrono::steady_clock::now();
+    out = options.extract == Extract::dc ? dual_contouring(grid, input, query, options.interp, st)
+                                         : marching_cubes(grid, options.interp, st);
+    st.seconds_extract = seconds_since(t0);
+    st.attempts = stats.attempts + 1;
+    st.band = attempt.band;
+    st.shell = attempt.shell;
+    stats = st;
+    if (open_edges(out) == 0) break;
+  }
+  if (stats_out) *stats_out = stats;
+  return out;
+}
+
+double vdf_paper_error(const TriangleSoup& mesh, const TriangleSoup& reference) {
+  const SurfaceQuery query(reference);
+  std::vector<double> vertex_area(mesh.vertices.size(), 0.0);
+  double total = 0;
+  for (const auto& f : mesh.faces) {
+    const double a = 0.5 * (mesh.vertices[f[1]] - mesh.vertices[f[0]]).cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]).norm();
+    total += a;
+    for (int k = 0; k < 3; ++k) vertex_area[f[k]] += a;
+  }
+  if (!(total > 0)) return 0;
+  double sum = 0;
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    if (vertex_area[i] == 0) continue;
+    const auto hit = query.closest(mesh.vertices[i]);
+    const double d = hit ? hit->distance : 0;
+    sum += d * d * vertex_area[i];
+  }
+  return std::sqrt(sum / (3 * total));
+}
+
+const char* to_string(Interp i) { return i == Interp::vector ? "vector" : "linear"; }
+const char* to_string(SignMode s) { return s == SignMode::winding ? "winding" : "dot"; }
+const char* to_string(Extract e) { return e == Extract::dc ? "dc" : "mc"; }
+
+}  // namespace s2c::repair

@@ -1,0 +1,176 @@
+// Volumetric repair: the vector-field distance function, its sign, and Marching Cubes.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <set>
+
+#include "s2c/core/check.h"
+#include "s2c/core/distance.h"
+#include "s2c/repair/volumetric.h"
+#include "../test_util.h"
+#include "volumetric/marching_cubes.h"
+#include "volumetric/mc_table.h"
+#include "volumetric/winding.h"
+
+namespace s2c::repair {
+namespace {
+
+TEST(Volumetric, CaseTableClosesEveryConfiguration) {
+  // In every case each crossing edge is used by an even number of triangle sides, so the case's
+  // triangles form a surface whose boundary lies on the cube faces only.
+  const auto& cases = mc::cases();
+  for (int mask = 1; mask < 255; ++mask) {
+    int crossing = 0;
+    for (const auto& e : mc::edges()) crossing += ((mask >> e.a) & 1) != ((mask >> e.b) & 1);
+    std::set<int> used;
+    for (const auto& t : cases[mask].triangles)
+      for (int k = 0; k < 3; ++k) used.insert(t[k]);
+    EXPECT_EQ(static_cast<int>(used.size()), crossing) << "mask " << mask;
+  }
+  EXPECT_TRUE(cases[0].triangles.empty());
+  EXPECT_TRUE(cases[255].triangles.empty());
+  EXPECT_EQ(cases[1].triangles.size(), 1u);
+}
+
+TEST(Volumetric, EdgeParameterIsTheClosestPointToTheSegment) {
+  double l = -1;
+  // AB crosses the edge's line at x = 0.3, offset in y and z: the closest point is x = 0.3.
+  ASSERT_TRUE(vector_edge_parameter({0, 0, 0}, {1, 0, 0}, {0.3, 1, 0.5}, {0.3, -1, 0.5}, l));
+  EXPECT_NEAR(l, 0.3, 1e-12);
+  // Skew: A = (0.2, 1, 0), B = (0.6, -1, 0) → crosses y = 0 at x = 0.4.
+  ASSERT_TRUE(vector_edge_parameter({0, 0, 0}, {1, 0, 0}, {0.2, 1, 0}, {0.6, -1, 0}, l));
+  EXPECT_NEAR(l, 0.4, 1e-12);
+  EXPECT_FALSE(vector_edge_parameter({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, l));  // parallel
+}
+
+TEST(Volumetric, WindingNumberIsOneInsideZeroOutside) {
+  const TriangleSoup s = test::icosphere({0, 0, 0}, 10, 3);
+  const WindingNumber w(s);
+  EXPECT_NEAR(w({0, 0, 0}), 1.0, 0.05);  // first-order far field: a few % off, fine for a 1/2 threshold
+  EXPECT_NEAR(w({9.5, 0, 0}), 1.0, 0.05);
+  EXPECT_NEAR(w({10.5, 0, 0}), 0.0, 0.05);
+  EXPECT_NEAR(w({50, 20, 0}), 0.0, 0.01);
+}
+
+void expect_closed_sphere(const TriangleSoup& out, double radius, double tol) {
+  const CheckResult c = check_mesh(out);
+  EXPECT_TRUE(c.cad_ready) << to_json(c);
+  EXPECT_EQ(c.components, 1u);
+  double worst = 0;
+  for (const auto& v : out.vertices) worst = std::max(worst, std::abs(v.norm() - radius));
+  EXPECT_LT(worst, tol);
+  EXPECT_GT(c.volume, 0);
+}
+
+TEST(Volumetric, RemeshesASphereClosedAndClose) {
+  const TriangleSoup s = test::icosphere({0, 0, 0}, 10, 4);
+  for (auto interp : {Interp::vector, Interp::linear})
+    for (auto sign : {SignMode::winding, SignMode::dot}) {
+      VolumetricOptions o;
+      o.voxel = 0.5;
+      o.interp = interp;
+      o.sign = sign;
+      VolumetricStats st;
+      const TriangleSoup out = volumetric_remesh(s, o, &st);
+      SCOPED_TRACE(std::string(to_string(interp)) + "/" + to_string(sign));
+      expect_closed_sphere(out, 10, 0.05);
+      EXPECT_GT(st.band_vertices, 1000u);
+    }
+}
+
+TEST(Volumetric, VectorInterpolationKeepsACubeSharperThanLinear) {
+  // A rotated cube: its faces are not grid planes, so linear interpolation is not exact.
+  TriangleSoup s = test::cube(10);
+  const Eigen::Matrix3d R = (Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 1, 0).normalized())).toRotationMatrix();
+  for (auto& v : s.vertices) v = R * v;
+  VolumetricOptions o;
+  o.voxel = 0.7;
+  o.interp = Interp::linear;
+  const TriangleSoup lin = volumetric_remesh(s, o);
+  o.interp = Interp::vector;
+  const TriangleSoup vec = volumetric_remesh(s, o);
+  EXPECT_TRUE(check_mesh(lin).cad_ready);
+  EXPECT_TRUE(check_mesh(vec).cad_ready);
+  const double e_lin = vdf_paper_error(lin, s), e_vec = vdf_paper_error(vec, s);
+  // Planar faces are exact either way; at the edges the closest-point segment does better.
+  EXPECT_LT(e_vec, e_lin) << "vector " << e_vec << " linear " << e_lin;
+}
+
+TEST(Volumetric, WindingSignClosesASmallHoleAndUnitesOverlaps) {
+  TriangleSoup s = test::icosphere({0, 0, 0}, 10, 3);
+  s.faces.erase(s.faces.begin() + 7);  // a hole of one triangle (~1.3 mm across)
+  test::add_cube(s, {5, -3, -3}, 8);    // a cube poking out of the sphere: overlapping shells
+  VolumetricOptions o;
+  o.voxel = 0.4;
+  o.band = 3;
+  const TriangleSoup out = volumetric_remesh(s, o);
+  const CheckResult c = check_mesh(out);
+  EXPECT_TRUE(c.cad_ready) << to_json(c);
+  EXPECT_EQ(c.components, 1u);
+}
+
+TEST(Volumetric, HollowPartKeepsItsCavity) {
+  TriangleSoup s;
+  test::add_cube(s, {0, 0, 0}, 20);
+  test::add_cube(s, {5, 5, 5}, 10, /*inward=*/true);
+  for (auto sign : {SignMode::winding, SignMode::dot}) {
+    VolumetricOptions o;
+    o.voxel = 0.6;
+    o.sign = sign;
+    const CheckResult c = check_mesh(volumetric_remesh(s, o));
+    EXPECT_TRUE(c.cad_ready) << to_json(c);
+    EXPECT_EQ(c.components, 2u);
+    EXPECT_NEAR(c.volume, 8000 - 1000, 150);
+  }
+}
+
+/// Largest dihedral angle (degrees) over the mesh's edges.
+double sharpest_edge_deg(const TriangleSoup& s) {
+  std::map<std::pair<int, int>, std::vector<Eigen::Vector3d>> normals;
+  for (const auto& f : s.faces) {
+    const Eigen::Vector3d n = (s.vertices[f[1]] - s.vertices[f[0]]).cross(s.vertices[f[2]] - s.vertices[f[0]]).normalized();
+    for (int k = 0; k < 3; ++k) normals[std::minmax(f[k], f[(k + 1) % 3])].push_back(n);
+  }
+  double worst = 0;
+  for (const auto& [e, ns] : normals)
+    if (ns.size() == 2) worst = std::max(worst, std::acos(std::clamp(ns[0].dot(ns[1]), -1.0, 1.0)) * 180 / M_PI);
+  return worst;
+}
+
+TEST(Volumetric, DualContouringKeepsSharpEdgesAndStaysCadReady) {
+  TriangleSoup s = test::cube(10);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  for (auto& v : s.vertices) v = R * v;
+  VolumetricOptions o;
+  o.voxel = 0.45;
+  o.extract = Extract::dc;
+  const TriangleSoup dc = volumetric_remesh(s, o);
+  const CheckResult c = check_mesh(dc);
+  EXPECT_TRUE(c.cad_ready) << to_json(c);
+  EXPECT_NEAR(c.volume, 1000, 5);
+  // The cube's 90° edges survive as edges of about 90° (MC bevels them into two ~45° bends).
+  EXPECT_GT(sharpest_edge_deg(dc), 80);
+  // The vertices lie on the cube's surface (no bevel).
+  const SurfaceQuery q(s);
+  double worst = 0, sum = 0;
+  for (const auto& v : dc.vertices) {
+    const double d = q.closest(v)->distance;
+    worst = std::max(worst, d);
+    sum += d;
+  }
+  EXPECT_LT(worst, 0.1);
+  EXPECT_LT(sum / double(dc.vertices.size()), 0.005);
+}
+
+TEST(Volumetric, PaperErrorIsZeroOnTheReference) {
+  const TriangleSoup s = test::icosphere({0, 0, 0}, 5, 2);
+  EXPECT_NEAR(vdf_paper_error(s, s), 0.0, 1e-9);
+}
+
+TEST(Volumetric, EmptyInputIsRejected) {
+  test::expect_invalid_input([] { volumetric_remesh(TriangleSoup{}, {}); }, {"no faces"});
+}
+
+}  // namespace
+}  // namespace s2c::repair
