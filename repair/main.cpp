@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
   app.add_option("--holes", holes, "Hole filling: auto (per hole), rbf, liepa, none (leave holes to volumetric)")
       ->check(CLI::IsMember({"auto", "rbf", "liepa", "none"}))->capture_default_str();
   app.add_option("--gap", o.gap_tolerance, "Close gaps up to this width, mm (default: half the mean boundary edge)");
-  auto* voxel = app.add_option("--voxel", o.volumetric.voxel, "Volumetric grid spacing, mm (default: longest side / 320)");
+  auto* voxel = app.add_option("--voxel", o.volumetric.voxel, "Volumetric grid spacing, mm (default: longest side / 320, at most sqrt(area / 60000))");
   app.add_option("--resolution", o.volumetric.resolution, "Volumetric cells along the longest side (instead of --voxel)")
       ->excludes(voxel);
   app.add_option("--band", o.volumetric.band, "Narrow band half width, voxels")->capture_default_str();
@@ -45,8 +45,9 @@ int main(int argc, char** argv) {
   app.add_option("--sign", sign, "Inside/outside: winding (generalised winding number, robust to holes and "
                  "overlaps) or dot (the paper's rule with angle-weighted pseudonormals)")
       ->check(CLI::IsMember({"winding", "dot"}))->capture_default_str();
-  app.add_option("--extract", extract, "Surface extraction: mc (Marching Cubes)")
-      ->check(CLI::IsMember({"mc"}))->capture_default_str();
+  app.add_option("--extract", extract, "Volumetric surface extraction: mc (Marching Cubes) or dc (dual contouring "
+                 "from the same closest points and surface normals: keeps sharp edges and corners)")
+      ->check(CLI::IsMember({"mc", "dc"}))->capture_default_str();
   app.add_option("--decimate", o.decimate_tolerance_voxels,
                  "After volumetric repair, decimate while the surface moves less than this many voxels (0 = off)")
       ->capture_default_str();
@@ -63,6 +64,7 @@ int main(int argc, char** argv) {
     o.fill.method = holes == "rbf" ? FillMethod::rbf : holes == "liepa" ? FillMethod::liepa : FillMethod::automatic;
     o.volumetric.interp = interp == "linear" ? Interp::linear : Interp::vector;
     o.volumetric.sign = sign == "dot" ? SignMode::dot : SignMode::winding;
+    o.volumetric.extract = extract == "dc" ? Extract::dc : Extract::mc;
 
     s2c::Report report("scan2cad-repair");
     report.parameters() = {{"input", input},       {"output", output},          {"strategy", strategy},

@@ -128,6 +128,15 @@ CheckResult surface_repair(TriangleSoup& soup, const RepairOptions& o, nlohmann:
   return check;
 }
 
+/// The default grid: the longest side / 320, but no finer than √(area / 60000) so that Marching
+/// Cubes gives some 10⁵ triangles, not millions, before decimation (which costs ~25 µs per collapse).
+double default_voxel(const TriangleSoup& soup) {
+  const Bounds b = bounds(soup);
+  double area = 0;
+  for (std::size_t f = 0; f < soup.faces.size(); ++f) area += face_area(soup, static_cast<int>(f));
+  return std::max((b.max - b.min).maxCoeff() / 320, std::sqrt(area / 60000));
+}
+
 nlohmann::json volumetric_json(const VolumetricOptions& vo, const VolumetricStats& st) {
   return {{"voxel_mm", st.voxel},
           {"band_voxels", vo.band},
@@ -153,35 +162,54 @@ nlohmann::json volumetric_json(const VolumetricOptions& vo, const VolumetricStat
 TriangleSoup volumetric_repair(const std::vector<const TriangleSoup*>& inputs, const RepairOptions& o,
                                nlohmann::json& rep) {
   auto t0 = Clock::now();
-  TriangleSoup out;
+  TriangleSoup out, fallback;
+  bool have_fallback = false;
   rep["volumetric"] = nlohmann::json::array();
   for (std::size_t k = 0; k < inputs.size(); ++k) {
     const TriangleSoup& soup = *inputs[k];
     VolumetricOptions vo = o.volumetric;
     const Bounds b = bounds(soup);
-    if (!(vo.voxel > 0) && vo.resolution <= 0) vo.voxel = (b.max - b.min).maxCoeff() / 320;
-    std::vector<Interp> interps = {vo.interp};
-    if (vo.interp != Interp::linear) interps.push_back(Interp::linear);
-    bool good = false;
-    for (Interp interp : interps) {
+    if (!(vo.voxel > 0) && vo.resolution <= 0) vo.voxel = default_voxel(soup);
+    // What is asked first; then Marching Cubes (dual contouring can pinch two sheets of one cell
+    // into a non-manifold edge); then the linear edge point.
+    std::vector<std::pair<Extract, Interp>> tries = {{vo.extract, vo.interp}};
+    if (vo.extract != Extract::mc) tries.push_back({Extract::mc, vo.interp});
+    if (vo.interp != Interp::linear) tries.push_back({Extract::mc, Interp::linear});
+    bool good = false, shell = false;
+    for (const auto& [extract, interp] : tries) {
+      vo.extract = extract;
       vo.interp = interp;
       VolumetricStats st;
-      out = volumetric_remesh(soup, vo, &st);
+      TriangleSoup candidate = volumetric_remesh(soup, vo, &st);
       nlohmann::json j = volumetric_json(vo, st);
       j["input"] = k == 0 && inputs.size() > 1 ? "surface-repaired" : "input";
-      j["clean"] = clean_json(clean(out));  // loose specks of the band
-      const std::size_t pairs = self_intersecting_pairs(out).size();
-      j["self_intersections"] = pairs;
+      j["clean"] = clean_json(clean(candidate));  // loose specks of the band
+      const CheckResult c = check_mesh(candidate);
+      j["cad_ready"] = c.cad_ready;
+      j["self_intersections"] = c.self_intersections;
+      j["nonmanifold_edges"] = c.nonmanifold_edges;
+      j["problems"] = c.problems;
       rep["volumetric"].push_back(j);
       rep["voxel_mm"] = st.voxel;
-      if (pairs == 0) {
+      if (c.cad_ready) {
         good = true;
+        shell = st.shell > 0;
+        out = std::move(candidate);
         break;
       }
+      if (!have_fallback && k + 1 == inputs.size()) out = std::move(candidate);  // nothing better yet
     }
-    if (good && rep["volumetric"].back()["shell_mm"].get<double>() == 0) break;
-    if (good && k + 1 == inputs.size()) break;
+    // A result that needed the shell fallback is kept, but the next input may do without it.
+    if (good && !shell) {
+      have_fallback = false;
+      break;
+    }
+    if (good && !have_fallback) {
+      fallback = std::move(out);
+      have_fallback = true;
+    }
   }
+  if (have_fallback) out = std::move(fallback);
   rep["seconds"]["volumetric"] = since(t0);
   t0 = Clock::now();
   const double voxel = rep["voxel_mm"].get<double>();

@@ -6,7 +6,7 @@ rm -rf "$work"; mkdir -p "$work"
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
 "$bin/scan2cad" run "$src/fixtures/scans/plate" --out "$work/out" --quiet || fail "run exited $?"
-for f in manifest.json cloud.ply mesh.ply check.json reports/reconstruct.json; do
+for f in manifest.json cloud.ply mesh.ply repaired.ply check.json reports/reconstruct.json reports/repair.json; do
   [[ -s "$work/out/$f" ]] || fail "missing $f"
 done
 python3 - "$work/out" <<'PY'
@@ -15,6 +15,7 @@ out = sys.argv[1]
 m = json.load(open(os.path.join(out, "manifest.json")))
 st = {s["name"]: s for s in m["stages"]}
 assert st["reconstruct"]["status"] == "ok", st["reconstruct"]
+assert st["repair"]["status"] == "ok", st["repair"]
 assert st["check"]["status"] == "ok", st["check"]
 for s in m["stages"]:
     if s["status"] == "ok":
@@ -25,7 +26,21 @@ for k in ["closed", "boundary_loops", "nonmanifold_edges", "nonmanifold_vertices
     assert k in c, k
 r = json.load(open(os.path.join(out, "reports", "reconstruct.json")))
 assert r["counts"]["faces"] > 10000, r["counts"]
+# The repaired mesh is what the pipeline hands on: it must be CAD-ready.
+assert c["cad_ready"], c["problems"]
+rep = json.load(open(os.path.join(out, "reports", "repair.json")))["counts"]
+assert rep["defects_before"]["boundary_loops"] > 0, "the trimmed scan mesh should have holes to fill"
 print("manifest ok:", [(s["name"], s["status"]) for s in m["stages"]])
+PY
+# Against the true part: the repaired scan is within tolerance of the plate it was scanned from.
+"$bin/s2c-bench-accuracy" "$work/out/repaired.ply" "$src/fixtures/parts/plate.stl" > "$work/accuracy.json"
+python3 - "$work/accuracy.json" <<'PY'
+import json, sys
+a = json.load(open(sys.argv[1]))
+print("repaired plate: chamfer %.4f mm, coverage %.3f, hausdorff %.3f mm" % (a["chamfer_mm"], a["coverage"], a["hausdorff_mm"]))
+assert a["chamfer_mm"] <= 0.03, a["chamfer_mm"]
+assert a["coverage"] >= 0.97, a["coverage"]
+assert a["hausdorff_mm"] <= 1.0, a["hausdorff_mm"]
 PY
 # Re-run: everything up to date.
 "$bin/scan2cad" run "$src/fixtures/scans/plate" --out "$work/out" --quiet

@@ -5,7 +5,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <exception>
+#include <numeric>
+#include <string>
+#include <unordered_map>
 #include <unordered_set>
 
 #include <Eigen/Eigenvalues>
@@ -210,18 +215,225 @@ FillResult fill_one(TriangleSoup& soup, MeshIndex& index, const Hole& hole, cons
   return r;
 }
 
+// ---------------------------------------------------------------------------------------------
+// Pairing at shared rim vertices. A rim vertex with several open fans of faces (a nested hole, or
+// holes touching at a vertex) ends up manifold only when each hole side's patch joins the end of
+// one fan to the start of *another*, so that all fans close into one disc around the vertex. The
+// loops handed in fix that pairing (each occurrence of the vertex pairs its incoming rim edge
+// with its outgoing one). Where that would close a fan on itself (the vertex would be left with
+// several closed fans: a pinch), the outgoing edges of two occurrences are swapped, which merges
+// the two fan cycles at the vertex; it splits the loop in two (occurrences in one loop) or
+// merges two loops (occurrences in different loops).
+
+struct Loop {
+  std::vector<int> loop;
+  std::vector<int> sources;  ///< input holes it holds edges of, primary (smallest) first
+  std::string note;          ///< how it was re-paired, empty when it is an input loop unchanged
+};
+
+std::vector<Loop> repair_pairing(const TriangleSoup& soup, const MeshIndex& index, const std::vector<Hole>& holes) {
+  // Occurrence o: a position of a loop; succ[o]: the next occurrence along its loop.
+  std::vector<int> vert, hole_of, succ, prev;
+  std::vector<std::size_t> first(holes.size() + 1, 0);
+  for (std::size_t h = 0; h < holes.size(); ++h) {
+    const int n = static_cast<int>(holes[h].loop.size()), b = static_cast<int>(vert.size());
+    first[h] = static_cast<std::size_t>(b);
+    for (int i = 0; i < n; ++i) {
+      vert.push_back(holes[h].loop[i]);
+      hole_of.push_back(static_cast<int>(h));
+      succ.push_back(b + (i + 1) % n);
+      prev.push_back(b + (i + n - 1) % n);
+    }
+  }
+  first[holes.size()] = vert.size();
+  const int nv = static_cast<int>(soup.vertices.size());
+  std::unordered_map<int, std::vector<int>> at;  // vertex → its occurrences
+  for (int o = 0; o < static_cast<int>(vert.size()); ++o)
+    if (vert[o] >= 0 && vert[o] < nv) at[vert[o]].push_back(o);
+  // Length of the loop through o (bounded walk).
+  const auto loop_length = [&](int o) {
+    int len = 1;
+    for (int x = succ[o]; x != o && len <= static_cast<int>(vert.size()); x = succ[x]) ++len;
+    return len;
+  };
+  bool changed = false;
+  std::vector<int> candidates;
+  for (const auto& [v, occ] : at)
+    if (occ.size() > 1) candidates.push_back(v);
+  std::sort(candidates.begin(), candidates.end());  // deterministic
+  for (int v : candidates) {
+    const auto& occ = at[v];
+    // Fans at v: union-find over the faces of v joined through edges at v.
+    const std::vector<int> faces = index.faces_of(v);
+    std::vector<int> parent(faces.size());
+    std::iota(parent.begin(), parent.end(), 0);
+    const auto find = [&](int x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    std::unordered_map<int, int> by_other, local;
+    for (int f = 0; f < static_cast<int>(faces.size()); ++f) {
+      local[faces[f]] = f;
+      for (int c : soup.faces[faces[f]]) {
+        if (c == v) continue;
+        auto [it, inserted] = by_other.try_emplace(c, f);
+        if (!inserted) parent[find(f)] = find(it->second);
+      }
+    }
+    // Fan of each occurrence's incoming and outgoing rim edge (the mesh face holds it reversed).
+    const auto fan_of_face = [&](int f) {
+      const auto it = local.find(f);
+      return it == local.end() ? -1 : find(it->second);
+    };
+    std::vector<int> fin(occ.size()), fout(occ.size());
+    bool known = true;
+    for (std::size_t k = 0; k < occ.size(); ++k) {
+      fin[k] = fan_of_face(index.face_with(v, vert[prev[occ[k]]]));
+      fout[k] = fan_of_face(index.face_with(vert[succ[occ[k]]], v));
+      known &= fin[k] >= 0 && fout[k] >= 0;
+    }
+    if (!known) continue;
+    // Cycles of the fan pairing: a union-find over fans joined by each occurrence.
+    std::vector<int> cyc(faces.size());
+    std::iota(cyc.begin(), cyc.end(), 0);
+    const auto root = [&](int x) {
+      while (cyc[x] != x) x = cyc[x] = cyc[cyc[x]];
+      return x;
+    };
+    for (std::size_t k = 0; k < occ.size(); ++k) cyc[root(fin[k])] = root(fout[k]);
+    for (std::size_t a = 0; a < occ.size(); ++a)
+      for (std::size_t b = a + 1; b < occ.size(); ++b) {
+        if (root(fin[a]) == root(fin[b])) continue;
+        const int oa = occ[a], ob = occ[b];
+        std::swap(succ[oa], succ[ob]);
+        // A split must not leave a loop of fewer than 3 edges (two edges between the same two
+        // vertices are a gap to stitch, not a hole to fill).
+        if (loop_length(oa) < 3 || loop_length(ob) < 3) {
+          std::swap(succ[oa], succ[ob]);
+          continue;
+        }
+        prev[succ[oa]] = oa;
+        prev[succ[ob]] = ob;
+        std::swap(fout[a], fout[b]);
+        cyc[root(fin[a])] = root(fin[b]);
+        changed = true;
+      }
+  }
+  std::vector<Loop> out;
+  if (!changed) {
+    for (std::size_t h = 0; h < holes.size(); ++h) out.push_back({holes[h].loop, {static_cast<int>(h)}, {}});
+    return out;
+  }
+  // Walk the cycles of succ, each from its smallest occurrence (an unchanged input loop keeps its
+  // start and order).
+  std::vector<char> done(vert.size(), 0);
+  for (int o = 0; o < static_cast<int>(vert.size()); ++o) {
+    if (done[o]) continue;
+    Loop l;
+    std::vector<int> sources;
+    int x = o;
+    do {
+      done[x] = 1;
+      l.loop.push_back(vert[x]);
+      sources.push_back(hole_of[x]);
+      x = succ[x];
+    } while (x != o && l.loop.size() <= vert.size());
+    std::sort(sources.begin(), sources.end());
+    sources.erase(std::unique(sources.begin(), sources.end()), sources.end());
+    l.sources = sources;
+    const std::size_t whole = first[static_cast<std::size_t>(hole_of[o]) + 1] - first[static_cast<std::size_t>(hole_of[o])];
+    if (sources.size() > 1 || l.loop.size() != whole) {
+      l.note = "re-paired at shared rim vertices so that each closes to one fan (" + std::to_string(l.loop.size()) +
+               " of " + std::to_string(whole) + " rim positions";
+      if (sources.size() > 1) l.note += ", merged with " + std::to_string(sources.size() - 1) + " other hole(s)";
+      l.note += ")";
+    }
+    out.push_back(std::move(l));
+  }
+  return out;
+}
+
+// fill_one, and when that fails on a loop that passes a vertex twice: the loop split at that
+// vertex into two loops, each filled alone (the vertex is then left with two fans, a pinch, but
+// the hole is closed; check_patch allows a vertex that already had several fans to keep them).
+FillResult fill_loop(TriangleSoup& soup, MeshIndex& index, const Hole& hole, const FillOptions& options, int depth) {
+  FillResult r = fill_one(soup, index, hole, options);
+  if (r.filled || depth > 8) return r;
+  const auto& loop = hole.loop;
+  const int n = static_cast<int>(loop.size());
+  std::unordered_map<int, int> seen;
+  for (int j = 0; j < n; ++j) {
+    const auto [it, inserted] = seen.try_emplace(loop[j], j);
+    if (inserted) continue;
+    const int i = it->second;
+    if (j - i < 3 || n - (j - i) < 3) continue;
+    Hole a = hole, b = hole;
+    a.loop.assign(loop.begin() + i, loop.begin() + j);
+    b.loop.assign(loop.begin() + j, loop.end());
+    b.loop.insert(b.loop.end(), loop.begin(), loop.begin() + i);
+    FillResult ra = fill_loop(soup, index, a, options, depth + 1);
+    FillResult rb = fill_loop(soup, index, b, options, depth + 1);
+    FillResult m = ra;
+    m.filled = ra.filled && rb.filled;
+    m.new_vertices += rb.new_vertices;
+    m.new_faces += rb.new_faces;
+    m.choice = "split at repeated rim vertex " + std::to_string(loop[i]) + " (" + r.reason + "): " + ra.choice +
+               " | " + rb.choice;
+    m.reason = ra.reason;
+    if (!rb.reason.empty()) m.reason += (m.reason.empty() ? "" : " | ") + rb.reason;
+    if (!m.filled && m.reason.empty()) m.reason = r.reason;
+    return m;
+  }
+  return r;
+}
+
 }  // namespace
 
 std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& holes, const FillOptions& options) {
   MeshIndex index(soup);
-  std::vector<FillResult> results;
-  results.reserve(holes.size());
-  for (const Hole& hole : holes) {
+  std::vector<FillResult> results(holes.size());
+  std::vector<double> seconds(holes.size(), 0);
+  const auto t_pair = std::chrono::steady_clock::now();
+  const std::vector<Loop> loops = repair_pairing(soup, index, holes);
+  const double pair_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_pair).count();
+  // Per input hole: the loops it is the primary source of (normally exactly its own loop).
+  std::vector<std::vector<const Loop*>> by_hole(holes.size());
+  for (const Loop& l : loops) by_hole[static_cast<std::size_t>(l.sources.front())].push_back(&l);
+  for (std::size_t h = 0; h < holes.size(); ++h) {
+    if (by_hole[h].empty()) continue;  // merged into an earlier hole, reported below
     const auto t0 = std::chrono::steady_clock::now();
-    FillResult r = fill_one(soup, index, hole, options);
-    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    results.push_back(std::move(r));
+    FillResult& r = results[h];
+    bool first = true;
+    for (const Loop* l : by_hole[h]) {
+      Hole piece = holes[h];
+      piece.loop = l->loop;
+      FillResult part = fill_loop(soup, index, piece, options, 0);
+      if (!l->note.empty()) part.choice = l->note + "; " + part.choice;
+      if (first) {
+        r = std::move(part);
+        first = false;
+        continue;
+      }
+      // A hole re-paired into several loops: filled when every piece is.
+      r.filled = r.filled && part.filled;
+      r.new_vertices += part.new_vertices;
+      r.new_faces += part.new_faces;
+      r.choice += " | " + part.choice;
+      if (!part.reason.empty()) r.reason += (r.reason.empty() ? "" : " | ") + part.reason;
+    }
+    seconds[h] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
+  for (const Loop& l : loops)
+    for (std::size_t k = 1; k < l.sources.size(); ++k) {
+      const auto h = static_cast<std::size_t>(l.sources[k]), into = static_cast<std::size_t>(l.sources.front());
+      if (!by_hole[h].empty()) continue;  // also primary of another loop: reported there
+      FillResult& r = results[h];
+      r.method = results[into].method;
+      r.filled = results[into].filled;
+      r.choice = "merged into hole " + std::to_string(into) + " at a shared rim vertex";
+      if (!r.filled) r.reason = "filled with hole " + std::to_string(into) + ", which failed";
+    }
+  for (std::size_t h = 0; h < holes.size(); ++h) results[h].seconds = seconds[h] + pair_seconds / double(holes.size());
   return results;
 }
 

@@ -288,7 +288,23 @@ bool triangulate(const TriangleSoup& soup, const MeshIndex& index, Patch& patch,
     poly.across.push_back(nf);
   }
   patch.faces.clear();
-  return triangulate_large(index, poly, patch, std::max<std::size_t>(dp_limit, 8), why, 0);
+  if (triangulate_large(index, poly, patch, std::max<std::size_t>(dp_limit, 8), why, 0)) return true;
+  // No triangulation from the rim vertices alone (every diagonal already exists in the mesh,
+  // e.g. a 4-vertex hole whose both diagonals are mesh edges): a fan around one new vertex at
+  // the rim's centroid, possible when the rim passes every vertex once.
+  std::unordered_set<int> distinct(patch.rim.begin(), patch.rim.end());
+  if (static_cast<int>(distinct.size()) != n || patch.size() != n) return false;
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  double sigma = 0;
+  for (int i = 0; i < n; ++i) {
+    c += patch.points[i] / n;
+    sigma += (patch.sigma.size() == static_cast<std::size_t>(n) ? patch.sigma[i] : 0) / n;
+  }
+  patch.faces.clear();
+  patch.points.push_back(c);
+  if (patch.sigma.size() == static_cast<std::size_t>(n)) patch.sigma.push_back(sigma);
+  for (int i = 0; i < n; ++i) patch.faces.push_back({i, (i + 1) % n, n});
+  return true;
 }
 
 bool refine(const MeshIndex& index, Patch& patch, std::size_t max_vertices, std::string& why) {

@@ -17,7 +17,8 @@ constexpr std::size_t kDpLimit = 300;
 /// Minimum-weight triangulation of the loop (patch.rim / patch.points, rim only) into
 /// patch.faces; weight = (largest dihedral angle, area) compared lexicographically. Triangles
 /// with a repeated vertex, degenerate triangles and interior edges that already exist in the
-/// mesh are never chosen. \return false (with `why`) when no such triangulation exists.
+/// mesh are never chosen. When no such triangulation exists and the rim passes every vertex once,
+/// the loop is fanned around one new vertex at its centroid. \return false (with `why`) otherwise.
 bool triangulate(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, std::string& why,
                  std::size_t dp_limit = kDpLimit);
 

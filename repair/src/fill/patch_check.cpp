@@ -61,16 +61,18 @@ std::string check_topology(const TriangleSoup& soup, const MeshIndex& index, con
     for (int g : p.rim) positions_extra += !seen.insert(g).second;
   }
   if (V - E + F != 1 && V - positions_extra - E + F != 1) return "patch is not a disc";
-  // One edge-connected fan of faces around every touched vertex (mesh faces included).
+  // Fans (edge-connected faces) around every touched vertex. A vertex must end with one fan,
+  // except a rim vertex that already had several (a pinch that no patch can undo, e.g. a closed
+  // cone of faces touching the rim's fan at one vertex, or a nested loop split into two): it may
+  // keep them as long as each patch face there joins a fan of mesh faces (no fan of patch faces
+  // only) and no fan is lost or added, i.e. after ≤ before.
   std::unordered_map<int, std::vector<std::array<int, 3>>> fans;
   for (const auto& t : p.faces) {
     const std::array<int, 3> g{p.global(t[0]), p.global(t[1]), p.global(t[2])};
     for (int c : g) fans[c].push_back(g);
   }
-  for (auto& [v, faces] : fans) {
-    if (v < p.base)
-      for (int f : index.faces_of(v)) faces.push_back(soup.faces[f]);
-    std::vector<int> parent(faces.size());
+  const auto components = [](int v, const std::vector<std::array<int, 3>>& faces, std::vector<int>& parent) {
+    parent.resize(faces.size());
     std::iota(parent.begin(), parent.end(), 0);
     std::unordered_map<int, int> by_other;  // other corner of an edge at v → a face holding it
     for (int f = 0; f < static_cast<int>(faces.size()); ++f)
@@ -81,7 +83,26 @@ std::string check_topology(const TriangleSoup& soup, const MeshIndex& index, con
       }
     int roots = 0;
     for (int f = 0; f < static_cast<int>(faces.size()); ++f) roots += find(parent, f) == f;
-    if (roots != 1) return "vertex " + std::to_string(v) + " would be non-manifold";
+    return roots;
+  };
+  std::vector<int> parent;
+  for (auto& [v, faces] : fans) {
+    const std::size_t patch_faces = faces.size();
+    std::vector<std::array<int, 3>> mesh;
+    if (v < p.base)
+      for (int f : index.faces_of(v)) mesh.push_back(soup.faces[f]);
+    faces.insert(faces.end(), mesh.begin(), mesh.end());
+    const int after = components(v, faces, parent);
+    if (after == 1) continue;
+    std::vector<int> mesh_parent;
+    const int before = mesh.empty() ? 0 : components(v, mesh, mesh_parent);
+    bool attached = before > 1 && after <= before;
+    if (attached) {
+      std::unordered_set<int> with_mesh;
+      for (std::size_t f = patch_faces; f < faces.size(); ++f) with_mesh.insert(find(parent, static_cast<int>(f)));
+      for (std::size_t f = 0; f < patch_faces && attached; ++f) attached = with_mesh.count(find(parent, static_cast<int>(f))) > 0;
+    }
+    if (!attached) return "vertex " + std::to_string(v) + " would be non-manifold";
   }
   return {};
 }

@@ -279,21 +279,26 @@ void classify_by_winding(const TriangleSoup& soup, const SurfaceQuery& query, do
       if (std::abs(w - 0.5) < 0.25) ++unsure;
       (w >= 0.5 ? in : out)++;
     }
-    if (unsure == 0 && (in == 0 || out == 0)) {
+    const bool decisive = unsure == 0 && (in == 0 || out == 0);
+    if (shell > 0) {
+      // The shell fallback extracts one consistent field everywhere: the signed distance minus
+      // the shell offset, where only decisive inside regions count as inside (depth −d) and
+      // everything else, including regions that leak through holes the band cannot bridge,
+      // counts as outside (+d). Its zero set is closed in the band and never meets itself.
+      const bool deep = decisive && in > 0;
+      for (int v : members) {
+        auto& block = grid.block(static_cast<std::size_t>(v) / N);
+        block.flags[v % N] |= deep ? (kShell | kDeep) : kShell;
+        set_inside(v, deep || grid.vector(block, v % N).norm() < shell);
+      }
+      mixed += !decisive;
+      continue;
+    }
+    if (decisive) {
       for (int v : members) set_inside(v, in > 0);
       continue;
     }
     ++mixed;
-    if (shell > 0) {
-      // The region leaks from inside to outside through a hole the band cannot bridge: keep a
-      // closed shell of thickness 2·shell around the surface instead (always closed in the band).
-      for (int v : members) {
-        auto& block = grid.block(static_cast<std::size_t>(v) / N);
-        block.flags[v % N] |= kShell;
-        set_inside(v, grid.vector(block, v % N).norm() < shell);
-      }
-      continue;
-    }
     evaluations += members.size();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, members.size(), 256), [&](const auto& r) {
       for (std::size_t k = r.begin(); k != r.end(); ++k) set_inside(members[k], winding(position(members[k])) >= 0.5);

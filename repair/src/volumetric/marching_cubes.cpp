@@ -1,8 +1,10 @@
 #include "volumetric/marching_cubes.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <unordered_map>
+#include <vector>
 
 #include "volumetric/cells.h"
 #include "volumetric/mc_table.h"
@@ -34,12 +36,16 @@ Eigen::Vector3d crossing_point(const SparseGrid& grid, const Cell& cell, int e, 
   const Eigen::Vector3d pa = grid.position(cell.corner(edge.a)), pb = grid.position(cell.corner(edge.b));
   const Eigen::Vector3d va = grid.vector(*cell.block[edge.a], cell.local[edge.a]);
   const Eigen::Vector3d vb = grid.vector(*cell.block[edge.b], cell.local[edge.b]);
-  const bool shell_a = cell.block[edge.a]->flags[cell.local[edge.a]] & kShell;
-  const bool shell_b = cell.block[edge.b]->flags[cell.local[edge.b]] & kShell;
+  const std::uint8_t fa = cell.block[edge.a]->flags[cell.local[edge.a]];
+  const std::uint8_t fb = cell.block[edge.b]->flags[cell.local[edge.b]];
+  const bool shell_a = fa & kShell, shell_b = fb & kShell;
   // Signed distance to the surface the sign describes: the input surface, or the offset surface
-  // for vertices classified by the shell rule.
-  const double sa = shell_a ? va.norm() - grid.shell() : cell.inside(edge.a) ? -va.norm() : va.norm();
-  const double sb = shell_b ? vb.norm() - grid.shell() : cell.inside(edge.b) ? -vb.norm() : vb.norm();
+  // of the shell fallback.
+  auto value = [&](std::uint8_t f, const Eigen::Vector3d& v, bool inside) {
+    if (f & kShell) return ((f & kDeep) ? -v.norm() : v.norm()) - grid.shell();
+    return inside ? -v.norm() : v.norm();
+  };
+  const double sa = value(fa, va, cell.inside(edge.a)), sb = value(fb, vb, cell.inside(edge.b));
   // The scalar baseline: linear in the signed distance (both ends on the surface: midpoint).
   double lambda = sa != sb ? sa / (sa - sb) : 0.5;
   if (interp == Interp::vector && !shell_a && !shell_b) {
@@ -57,23 +63,86 @@ Eigen::Vector3d crossing_point(const SparseGrid& grid, const Cell& cell, int e, 
   return pa + lambda * (pb - pa);
 }
 
+namespace {
+
+/// Whether two cube edges lie on a common face of the cube.
+bool share_face(int e0, int e1) {
+  static const auto table = [] {
+    std::array<std::array<bool, 12>, 12> t{};
+    const auto& edges = mc::edges();
+    for (int i = 0; i < 12; ++i)
+      for (int j = 0; j < 12; ++j)
+        for (int axis = 0; axis < 3; ++axis) {
+          const int bit = 1 << axis, v = edges[i].a & bit;
+          if ((edges[i].b & bit) == v && (edges[j].a & bit) == v && (edges[j].b & bit) == v) t[i][j] = true;
+        }
+    return t;
+  }();
+  return table[e0][e1];
+}
+
+/// Fans a loop of edge points from the root that keeps every triangle facing the loop's own
+/// normal (a fan from a fixed corner folds over when the points sit near the cube's corners).
+/// A diagonal between two points on the same cube face would lie in that face, where the
+/// neighbouring cell draws its own segment: such roots are not used. When no root is left, the
+/// loop is fanned from its centroid, which is added as a vertex.
+void triangulate_loop(TriangleSoup& out, const std::vector<int>& ids, const std::vector<std::uint8_t>& loop) {
+  const std::size_t n = ids.size();
+  auto P = [&](std::size_t i) -> const Eigen::Vector3d& { return out.vertices[ids[i % n]]; };
+  if (n == 3) {
+    out.faces.push_back({ids[0], ids[1], ids[2]});
+    return;
+  }
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < n; ++i) normal += P(i).cross(P(i + 1));
+  int best_root = -1;
+  double best = 0;
+  for (std::size_t r = 0; r < n; ++r) {
+    bool in_face = false;
+    for (std::size_t i = 2; i + 1 < n && !in_face; ++i) in_face = share_face(loop[r], loop[(r + i) % n]);
+    if (in_face) continue;
+    double worst = 1e300;
+    for (std::size_t i = 1; i + 1 < n; ++i) {
+      const Eigen::Vector3d t = (P(r + i) - P(r)).cross(P(r + i + 1) - P(r));
+      const double len = t.norm();
+      worst = std::min(worst, len > 0 ? t.dot(normal) / len : -1.0);
+    }
+    if (worst > best) {
+      best = worst;
+      best_root = static_cast<int>(r);
+    }
+  }
+  if (best_root >= 0) {
+    for (std::size_t i = 1; i + 1 < n; ++i)
+      out.faces.push_back({ids[best_root], ids[(best_root + i) % n], ids[(best_root + i + 1) % n]});
+    return;
+  }
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < n; ++i) c += P(i);
+  const int ci = static_cast<int>(out.vertices.size());
+  out.vertices.push_back(c / double(n));
+  for (std::size_t i = 0; i < n; ++i) out.faces.push_back({ci, ids[i], ids[(i + 1) % n]});
+}
+
+}  // namespace
+
 TriangleSoup marching_cubes(const SparseGrid& grid, Interp interp, VolumetricStats& stats) {
   TriangleSoup out;
   std::unordered_map<std::uint64_t, int> edge_vertex;
   edge_vertex.reserve(stats.band_vertices / 2 + 16);
   const auto& cases = mc::cases();
+  std::vector<int> ids;
   for_each_crossing_cell(grid, [&](const Cell& cell) {
-    int ids[12];
-    for (const auto& tri : cases[cell.mask].triangles) {
-      for (int k = 0; k < 3; ++k) {
-        const int e = tri[k];
+    for (const auto& loop : cases[cell.mask].loops) {
+      ids.clear();
+      for (int e : loop) {
         const auto& edge = mc::edges()[e];
         const auto [it, inserted] =
             edge_vertex.emplace(grid_edge_key(cell.corner(edge.a), edge.axis), static_cast<int>(out.vertices.size()));
-        ids[e] = it->second;
         if (inserted) out.vertices.push_back(crossing_point(grid, cell, e, interp, stats));
+        ids.push_back(it->second);
       }
-      out.faces.push_back({ids[tri[0]], ids[tri[1]], ids[tri[2]]});
+      triangulate_loop(out, ids, loop);
     }
   });
   stats.triangles = out.faces.size();

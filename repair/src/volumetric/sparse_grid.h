@@ -14,9 +14,9 @@
 
 namespace s2c::repair {
 
-/// kShell: classified by the shell rule (inside iff closer than the shell offset), so its crossings
-/// lie on the offset surface, not on the input surface.
-constexpr std::uint8_t kInBand = 1, kInside = 2, kShell = 4;
+/// kShell: the shell fallback's field (signed distance minus the shell offset; kDeep: inside a
+/// decisive inside region, where the signed distance is −d), so crossings lie on the offset surface.
+constexpr std::uint8_t kInBand = 1, kInside = 2, kShell = 4, kDeep = 8;
 
 class SparseGrid {
  public:

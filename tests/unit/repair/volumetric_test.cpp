@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <tuple>
 #include <set>
 
 #include "s2c/core/check.h"
@@ -30,6 +31,48 @@ TEST(Volumetric, CaseTableClosesEveryConfiguration) {
   EXPECT_TRUE(cases[0].triangles.empty());
   EXPECT_TRUE(cases[255].triangles.empty());
   EXPECT_EQ(cases[1].triangles.size(), 1u);
+}
+
+TEST(Volumetric, CaseTableAgreesOnEveryFaceWithTheNeighbourCell) {
+  // The segments a case draws on a cube face must depend on that face's four corners only, or
+  // the two cells sharing the face disagree and the surface tears or crosses itself there.
+  const auto& edges = mc::edges();
+  auto face_of = [&](int e0, int e1, int& axis, int& side) {
+    // The face both edges lie on: an axis along which all four corners agree.
+    for (axis = 0; axis < 3; ++axis) {
+      const int bit = 1 << axis;
+      const int v = edges[e0].a & bit;
+      if ((edges[e0].b & bit) == v && (edges[e1].a & bit) == v && (edges[e1].b & bit) == v) {
+        side = v ? 1 : 0;
+        return true;
+      }
+    }
+    return false;
+  };
+  std::map<std::tuple<int, int>, std::set<std::pair<int, int>>> seen;  // (axis, face corner signs) → segments
+  for (int mask = 1; mask < 255; ++mask) {
+    std::map<std::pair<int, int>, std::set<std::pair<int, int>>> segments;  // (axis, side) → segments
+    for (const auto& loop : mc::cases()[mask].loops)
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const int e0 = loop[i], e1 = loop[(i + 1) % loop.size()];
+        int axis, side;
+        ASSERT_TRUE(face_of(e0, e1, axis, side)) << "mask " << mask;
+        // Edges in face coordinates: drop the face's axis bit so both cells name them alike.
+        const int bit = 1 << axis;
+        const int a = (edges[e0].a & ~bit) * 16 + (edges[e0].b & ~bit), b = (edges[e1].a & ~bit) * 16 + (edges[e1].b & ~bit);
+        segments[{axis, side}].insert(std::minmax(a, b));
+      }
+    for (int axis = 0; axis < 3; ++axis)
+      for (int side = 0; side < 2; ++side) {
+        int signs = 0;
+        for (int c = 0; c < 8; ++c)
+          if (((c >> axis) & 1) == side && ((mask >> c) & 1)) signs |= 1 << (c & ~(1 << axis));
+        const auto key = std::make_tuple(axis, signs);
+        const auto& segs = segments[{axis, side}];
+        const auto [it, inserted] = seen.emplace(key, segs);
+        EXPECT_EQ(it->second, segs) << "mask " << mask << " axis " << axis << " side " << side;
+      }
+  }
 }
 
 TEST(Volumetric, EdgeParameterIsTheClosestPointToTheSegment) {

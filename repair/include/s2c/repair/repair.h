@@ -23,7 +23,7 @@ struct RepairOptions {
   FillOptions fill;                  ///< hole filling (method none → holes are left to the volumetric step)
   bool fill_holes = true;
   double gap_tolerance = 0;          ///< mm; 0 = half the mean boundary edge length
-  VolumetricOptions volumetric;      ///< voxel 0 = longest box side / 320
+  VolumetricOptions volumetric;      ///< voxel 0 = max(longest box side / 320, √(area / 60000))
   /// Decimation after volumetric repair: largest distance a collapse may move the surface,
   /// in voxels (quadric error); 0 = keep every Marching Cubes triangle.
   double decimate_tolerance_voxels = 0.25;

@@ -1,0 +1,129 @@
+// The repair driver and its cleaning/defect steps: inputs with known defects → CAD-ready meshes.
+#include <gtest/gtest.h>
+
+#include "s2c/core/check.h"
+#include "s2c/repair/defects.h"
+#include "s2c/repair/repair.h"
+#include "../test_util.h"
+
+namespace s2c::repair {
+namespace {
+
+TEST(Repair, CadReadyInputPassesThroughUnchanged) {
+  const TriangleSoup s = test::cube(10);
+  const RepairResult r = repair_mesh(s);
+  EXPECT_TRUE(r.cad_ready);
+  EXPECT_EQ(r.path, "unchanged");
+  EXPECT_EQ(r.mesh.faces, s.faces);
+}
+
+TEST(Repair, SphereWithHolesFlippedAndDuplicateFacesIsRepairedOnTheSurface) {
+  TriangleSoup s = test::icosphere({0, 0, 0}, 10, 3);
+  const std::size_t n = s.faces.size();
+  s.faces.erase(s.faces.begin() + 40, s.faces.begin() + 43);  // a hole
+  s.faces.erase(s.faces.begin() + 200);                       // another one
+  for (int i = 300; i < 310; ++i) std::swap(s.faces[i][1], s.faces[i][2]);  // a flipped patch
+  s.faces.push_back(s.faces[500]);                                          // a duplicate
+  const DefectReport before = find_defects(s);
+  EXPECT_GT(before.check.boundary_loops, 0u);
+  EXPECT_GT(before.check.orientation_conflicts, 0u);
+  EXPECT_EQ(before.check.duplicate_faces, 1u);
+  const RepairResult r = repair_mesh(s);
+  ASSERT_TRUE(r.cad_ready) << r.problem;
+  EXPECT_EQ(r.path, "surface");
+  EXPECT_GE(r.mesh.faces.size(), n - 4);
+  for (const auto& v : r.mesh.vertices) EXPECT_NEAR(v.norm(), 10, 0.6);  // patches stay near the sphere
+  EXPECT_TRUE(r.report["defects_after"]["cad_ready"].get<bool>());
+}
+
+TEST(Repair, OverlappingShellsBecomeOneCadReadySolid) {
+  TriangleSoup s;
+  test::add_cube(s, {0, 0, 0}, 10);
+  test::add_cube(s, {5, 5, 5}, 10);  // intersects the first cube
+  EXPECT_GT(find_defects(s).check.self_intersections, 0u);
+  const RepairResult r = repair_mesh(s);
+  ASSERT_TRUE(r.cad_ready) << r.problem;
+  const CheckResult c = check_mesh(r.mesh);
+  EXPECT_EQ(c.components, 1u);
+  EXPECT_NEAR(c.volume, 2000 - 125, 60);  // the union
+}
+
+TEST(Repair, NonManifoldEdgeIsResolved) {
+  // Two cubes sharing one edge: that edge has four faces.
+  TriangleSoup s;
+  test::add_cube(s, {0, 0, 0}, 10);
+  test::add_cube(s, {10, 10, 0}, 10);
+  // Weld the shared edge's vertices so the edge is really shared.
+  const int n = static_cast<int>(s.vertices.size());
+  for (int i = 8; i < n; ++i)
+    for (int j = 0; j < 8; ++j)
+      if ((s.vertices[i] - s.vertices[j]).norm() < 1e-12)
+        for (auto& f : s.faces)
+          for (int& v : f)
+            if (v == i) v = j;
+  EXPECT_GT(find_defects(s).check.nonmanifold_edges, 0u);
+  const RepairResult r = repair_mesh(s);
+  ASSERT_TRUE(r.cad_ready) << r.problem;
+  EXPECT_NEAR(check_mesh(r.mesh).volume, 2000, 80);
+}
+
+TEST(Repair, SurfaceOnlyStrategyReportsWhatIsLeft) {
+  TriangleSoup s;
+  test::add_cube(s, {0, 0, 0}, 10);
+  test::add_cube(s, {5, 5, 5}, 10);
+  RepairOptions o;
+  o.strategy = Strategy::surface;
+  o.fill_holes = false;
+  const RepairResult r = repair_mesh(s, o);
+  EXPECT_FALSE(r.cad_ready);
+  EXPECT_NE(r.problem.find("--strategy"), std::string::npos) << r.problem;
+}
+
+TEST(Repair, VolumetricStrategyWithDualContouringKeepsTheCubeSharp) {
+  TriangleSoup s = test::cube(10);
+  RepairOptions o;
+  o.strategy = Strategy::volumetric;
+  o.volumetric.extract = Extract::dc;
+  o.volumetric.voxel = 0.37;
+  const RepairResult r = repair_mesh(s, o);
+  ASSERT_TRUE(r.cad_ready) << r.problem;
+  EXPECT_EQ(r.path, "volumetric");
+  EXPECT_NEAR(check_mesh(r.mesh).volume, 1000, 5);
+  EXPECT_LT(r.mesh.faces.size(), 5000u);  // decimated: flat faces need few triangles
+}
+
+TEST(Clean, CavityPointsInwardAndDuplicatesGo) {
+  TriangleSoup s;
+  test::add_cube(s, {0, 0, 0}, 20, /*inward=*/true);  // outer shell written inside out
+  test::add_cube(s, {5, 5, 5}, 10);                   // cavity written outward
+  s.faces.push_back(s.faces[0]);
+  const CleanStats st = clean(s);
+  EXPECT_EQ(st.duplicate_faces_removed, 1u);
+  EXPECT_EQ(st.faces_flipped, 24u);
+  const CheckResult c = check_mesh(s);
+  EXPECT_TRUE(c.cad_ready) << to_json(c);
+  EXPECT_NEAR(c.volume, 8000 - 1000, 1e-9);
+}
+
+TEST(Defects, CountsNeedlesCapsZeroAreaAndTinyComponents) {
+  TriangleSoup s = test::cube(10);
+  const int b = static_cast<int>(s.vertices.size());
+  s.vertices.insert(s.vertices.end(), {{20, 0, 0}, {30, 0, 0}, {40, 0, 0},        // zero area
+                                       {20, 5, 0}, {30, 5, 0}, {20, 5.001, 0.05},  // needle
+                                       {20, 9, 0}, {30, 9, 0}, {25, 9.05, 0}});    // cap
+  s.faces.push_back({b, b + 1, b + 2});
+  s.faces.push_back({b + 3, b + 4, b + 5});
+  s.faces.push_back({b + 6, b + 7, b + 8});
+  const DefectReport d = find_defects(s, false);
+  EXPECT_EQ(d.zero_area_faces, 1u);
+  EXPECT_EQ(d.needles, 1u);
+  EXPECT_EQ(d.caps, 1u);
+  EXPECT_EQ(d.tiny_components, 3u);
+}
+
+TEST(Repair, EmptyInputIsRejected) {
+  test::expect_invalid_input([] { repair_mesh(TriangleSoup{}); }, {"no faces"});
+}
+
+}  // namespace
+}  // namespace s2c::repair
