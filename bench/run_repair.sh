@@ -7,7 +7,9 @@
 #   defects  s2c-make-defects fixtures/parts/NAME.stl --seed SEED → 8 defective variants per part;
 #            scan2cad repair on each (default options) → scan2cad check (cad_ready), report
 #            counts.path, s2c-bench-accuracy against fixtures/parts/NAME.stl (Chamfer, Hausdorff),
-#            repair time (the report's "repair" step) and wall time / peak RSS of the process.
+#            repair time (the report's "repair" step) and wall time / peak RSS of the process; also
+#            the defective input's own distances to the part (what the defect moved: a repair that
+#            keeps every input triangle cannot get below them).
 #   wrap     CGAL 5.5 alpha_wrap_3 (s2c-bench-alpha-wrap, alpha = diag/200, offset = diag/2000) on
 #            each WRAP_INPUTS mesh, then scan2cad repair --strategy volumetric --resolution N for N in
 #            WRAP_RES (ascending; stops at the first N whose Hausdorff to the input is ≤ CGAL's): the
@@ -118,10 +120,11 @@ if "defects" in sections:
             n += 1
             if rc != 0:
                 rows.append(f"| {p} | {v} | {defects} | {fmt(info.get('check', {}).get('faces'), ',')} | exit {rc} | **no** | "
-                            f"{counts.get('path', '—')} | — | — | — | {fmt(secs, '.2f')} | {wall:.2f} | {mb:.0f} |")
+                            f"{counts.get('path', '—')} | — | — | — | — | {fmt(secs, '.2f')} | {wall:.2f} | {mb:.0f} |")
                 continue
             c = check(dst, tag)
             a = accuracy(dst, truth, tag)
+            ai = accuracy(src, truth, f"{tag}.input")  # what the defect itself moved: the floor for geometry-only repair
             ready = bool(c.get("cad_ready"))
             ok += ready
             ch, h = a.get("chamfer_mm"), a.get("hausdorff_mm")
@@ -129,12 +132,13 @@ if "defects" in sections:
                 worst_ch, worst_h = max(worst_ch, ch), max(worst_h, h)
             rows.append(f"| {p} | {v} | {defects} | {fmt(info.get('check', {}).get('faces'), ',')} | 0 | "
                         f"{'yes' if ready else '**no**'} | {counts.get('path', '—')} | {fmt(c.get('faces'), ',')} | "
-                        f"{fmt(ch, '.4f')}{'' if ch is None or ch <= 0.03 else ' ✗'} | {fmt(h, '.3f')} | {fmt(secs, '.2f')} | {wall:.2f} | {mb:.0f} |")
+                        f"{fmt(ch, '.4f')}{'' if ch is None or ch <= 0.03 else ' ✗'} | {fmt(h, '.3f')} | "
+                        f"{fmt(ai.get('chamfer_mm'), '.4f')} / {fmt(ai.get('hausdorff_mm'), '.3f')} | {fmt(secs, '.2f')} | {wall:.2f} | {mb:.0f} |")
         summary.append(f"| {p} | {fmt(meta.get('edge_mm'), '.2f')} | {fmt(meta.get('clean', {}).get('faces'), ',')} | {ok}/{n} | {worst_ch:.4f} | {worst_h:.3f} |")
     print(f"### Defective CAD parts (s2c-make-defects --seed {seed}) → scan2cad repair (defaults)")
     print()
-    print("| part | variant | defects made | faces in | exit | CAD-ready | path | faces out | Chamfer mm | Hausdorff mm | repair s | wall s | peak MB |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| part | variant | defects made | faces in | exit | CAD-ready | path | faces out | Chamfer mm | Hausdorff mm | input Chamfer / Hausdorff mm | repair s | wall s | peak MB |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     print("\n".join(rows))
     print()
     print("| part | refined edge mm | clean faces | CAD-ready | worst Chamfer mm (target ≤ 0.03) | worst Hausdorff mm |")

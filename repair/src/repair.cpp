@@ -73,7 +73,7 @@ void close_and_fill(TriangleSoup& soup, const RepairOptions& o, nlohmann::json& 
   auto t0 = Clock::now();
   GapOptions go;
   go.tolerance = o.gap_tolerance;
-  const GapStats g = close_gaps(soup, go);
+  const GapStats g = o.close_gaps ? close_gaps(soup, go) : GapStats{};
   if (round == 0)
     rep["gaps"] = {{"contractions", g.contractions}, {"edge_splits", g.edge_splits}, {"max_distance_mm", g.max_distance}};
   add_seconds(rep, "gaps", t0);
@@ -282,6 +282,21 @@ RepairResult repair_mesh(const TriangleSoup& input, const RepairOptions& o) {
     nlohmann::json srep;
     surface_check = surface_repair(surface, o, srep);
     surface_ok = surface_check.cad_ready;
+    if (!surface_ok && o.close_gaps && srep.contains("gaps") && srep["gaps"]["contractions"].get<std::size_t>() > 0) {
+      // Gap closing can zip a narrow hole's rim onto itself and fold it; try again without it.
+      RepairOptions no_gaps = o;
+      no_gaps.close_gaps = false;
+      TriangleSoup retry = input;
+      nlohmann::json rrep;
+      const CheckResult c = surface_repair(retry, no_gaps, rrep);
+      if (c.cad_ready) {
+        surface = std::move(retry);
+        surface_check = c;
+        surface_ok = true;
+        rrep["gaps_retry"] = "the first attempt with gap closing was not CAD-ready";
+        srep = rrep;
+      }
+    }
     rep["surface"] = srep;
   }
   if (surface_ok) {

@@ -2,6 +2,7 @@
 #include "fill/liepa.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <deque>
 #include <limits>
@@ -358,14 +359,45 @@ bool fair(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, bool t
   const auto position = [&](int g) -> const Eigen::Vector3d& {
     return g >= patch.base ? patch.points[static_cast<std::size_t>(g - patch.base + n)] : soup.vertices[g];
   };
+  // Cotangent weights (as CGAL's fairing): cot of the angles opposite each edge, over the patch
+  // faces and, for the rim nodes of the C1 join, the mesh faces around them; taken on the
+  // refined patch before fairing. A weight is clamped to a small positive floor: obtuse
+  // triangles give negative cotangents that would let the solve fold the patch.
+  std::unordered_map<std::uint64_t, double> cot;
+  const auto add_triangle = [&](int a, int b, int c) {
+    const std::array<int, 3> t{a, b, c};
+    for (int k = 0; k < 3; ++k) {
+      const int o = t[k], u = t[(k + 1) % 3], w = t[(k + 2) % 3];
+      const Eigen::Vector3d e1 = position(u) - position(o), e2 = position(w) - position(o);
+      const double sn = e1.cross(e2).norm();
+      if (sn > 0) cot[edge_key(u, w)] += 0.5 * e1.dot(e2) / sn;
+    }
+  };
+  {
+    std::unordered_set<std::uint64_t> mesh_faces_done;
+    for (const auto& t : patch.faces) add_triangle(patch.global(t[0]), patch.global(t[1]), patch.global(t[2]));
+    if (tangent_continuous)
+      for (int g : patch.rim)
+        for (int f : index.faces_of(g))
+          if (mesh_faces_done.insert(static_cast<std::uint64_t>(f)).second)
+            add_triangle(soup.faces[f][0], soup.faces[f][1], soup.faces[f][2]);
+  }
+  constexpr double kMinCot = 0.05;
   std::vector<Eigen::Triplet<double>> trip;
   std::vector<Eigen::Vector3d> rhs;
   int row = 0;
+  std::vector<double> weights;
   for (auto& [center, list] : nbrs) {
     std::sort(list.begin(), list.end());
     list.erase(std::unique(list.begin(), list.end()), list.end());
     Eigen::Vector3d b = Eigen::Vector3d::Zero();
-    const double wgt = 1.0 / static_cast<double>(list.size());
+    weights.assign(list.size(), 0);
+    double total = 0;
+    for (std::size_t k = 0; k < list.size(); ++k) {
+      const auto it = cot.find(edge_key(center, list[k]));
+      weights[k] = std::max(it == cot.end() ? 0.0 : it->second, kMinCot);
+      total += weights[k];
+    }
     bool has_unknown = center >= patch.base;
     for (int u : list) has_unknown |= u >= patch.base;
     if (!has_unknown) continue;  // a rim node with no new neighbour: constant row, no information
@@ -374,7 +406,7 @@ bool fair(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, bool t
       else b += c * position(g);
     };
     add(center, -1.0);
-    for (int u : list) add(u, wgt);
+    for (std::size_t k = 0; k < list.size(); ++k) add(list[k], weights[k] / total);
     rhs.push_back(b);
     ++row;
   }

@@ -28,12 +28,14 @@ bool triangulate(const TriangleSoup& soup, const MeshIndex& index, Patch& patch,
 /// mean of their triangle's. \return false when the patch would exceed max_vertices.
 bool refine(const MeshIndex& index, Patch& patch, std::size_t max_vertices, std::string& why);
 
-/// Fairs the new vertices with the uniform umbrella operator U. `tangent_continuous` (Liepa):
-/// minimises Σ |U(v)|² over the new vertices and the rim, the rim's umbrella including its mesh
-/// neighbours, i.e. a discrete bi-Laplacian with the rim and one outer ring fixed (C1-like
-/// join). Otherwise U(v) = 0 at the new vertices with only the rim fixed (a harmonic,
-/// Tutte-like patch): a planar rim gives a planar patch, and unlike the bi-Laplacian with free
-/// rim slopes it cannot overshoot the rim (no folds for convex rims).
+/// Fairs the new vertices with the umbrella operator U with cotangent weights (normalised to
+/// sum 1, each clamped to ≥ 0.05; taken on the patch before fairing, as CGAL's
+/// triangulate_refine_and_fair_hole). `tangent_continuous` (Liepa): minimises Σ |U(v)|² over
+/// the new vertices and the rim, the rim's umbrella including its mesh neighbours, i.e. a
+/// discrete bi-Laplacian with the rim and one outer ring fixed (C1-like join). Otherwise
+/// U(v) = 0 at the new vertices with only the rim fixed (a harmonic, Tutte-like patch): a
+/// planar rim gives a planar patch, and unlike the bi-Laplacian with free rim slopes it cannot
+/// overshoot the rim (no folds for convex rims).
 bool fair(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, bool tangent_continuous,
           std::string& why);
 

@@ -1,5 +1,7 @@
 // Adjacency of the soup for hole filling (see patch.h).
 #include <algorithm>
+#include <cmath>
+#include <cstddef>
 
 #include "fill/patch.h"
 
@@ -32,6 +34,79 @@ MeshIndex::MeshIndex(const TriangleSoup& soup) {
   for (std::size_t f = 0; f < soup.faces.size(); ++f)
     if (valid_face(soup, f))
       for (int c : soup.faces[f]) vf_faces_[static_cast<std::size_t>(fill[static_cast<std::size_t>(c)]++)] = static_cast<int>(f);
+  // Grid: origin at the vertices' lower corner, cell twice the mean edge length (sampled).
+  if (!soup.vertices.empty()) {
+    Eigen::Vector3d lo = soup.vertices[0];
+    for (const auto& p : soup.vertices) lo = lo.cwiseMin(p);
+    grid_origin_ = lo.allFinite() ? lo : Eigen::Vector3d::Zero();
+  }
+  double sum = 0;
+  std::size_t count = 0;
+  const std::size_t step = std::max<std::size_t>(1, soup.faces.size() / 4096);
+  for (std::size_t f = 0; f < soup.faces.size(); f += step)
+    if (valid_face(soup, f)) {
+      const double e = (soup.vertices[soup.faces[f][1]] - soup.vertices[soup.faces[f][0]]).norm();
+      if (std::isfinite(e)) {
+        sum += e;
+        ++count;
+      }
+    }
+  cell_ = count && sum > 0 ? 2 * sum / double(count) : 1.0;
+  grid_.reserve(soup.faces.size() * 2);
+  for (std::size_t f = 0; f < soup.faces.size(); ++f)
+    if (valid_face(soup, f)) grid_insert(soup, static_cast<int>(f), false);
+  std::sort(grid_.begin(), grid_.end());
+  faces_ = soup.faces.size();
+}
+
+namespace {
+constexpr int kOversizeCells = 512;  // a face spanning more cells is tested with every patch
+std::uint64_t cell_key(long long x, long long y, long long z) {
+  const auto c = [](long long v) { return std::uint64_t(v + (1 << 20)) & 0x1fffff; };
+  return (c(x) << 42) | (c(y) << 21) | c(z);
+}
+}  // namespace
+
+void MeshIndex::grid_insert(const TriangleSoup& soup, int f, bool appended) {
+  const auto& t = soup.faces[static_cast<std::size_t>(f)];
+  const Eigen::Vector3d &a = soup.vertices[t[0]], &b = soup.vertices[t[1]], &c = soup.vertices[t[2]];
+  const Eigen::Vector3d lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+  const Eigen::Array3d l = ((lo - grid_origin_) / cell_).array().floor(), h = ((hi - grid_origin_) / cell_).array().floor();
+  if (!l.allFinite() || !h.allFinite() || (l < -1e6).any() || (h > 1e6).any() ||
+      (h - l + 1).prod() > kOversizeCells) {
+    oversize_.push_back(f);
+    return;
+  }
+  for (long long x = (long long)l.x(); x <= (long long)h.x(); ++x)
+    for (long long y = (long long)l.y(); y <= (long long)h.y(); ++y)
+      for (long long z = (long long)l.z(); z <= (long long)h.z(); ++z) {
+        if (appended) added_grid_[cell_key(x, y, z)].push_back(f);
+        else grid_.push_back({cell_key(x, y, z), f});
+      }
+}
+
+void MeshIndex::faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, std::vector<int>& out) const {
+  const std::size_t start = out.size();
+  const Eigen::Array3d l = ((lo - grid_origin_) / cell_).array().floor(), h = ((hi - grid_origin_) / cell_).array().floor();
+  const double cells = (h - l + 1).prod();
+  if (!(cells <= double(faces_ + added_grid_.size() + 64)) || (l < -1e6).any() || (h > 1e6).any()) {
+    // Box larger than the mesh's face count in cells: every face (still cheaper than the grid).
+    for (std::size_t f = 0; f < faces_; ++f) out.push_back(static_cast<int>(f));
+    for (const auto& [key, faces] : added_grid_) out.insert(out.end(), faces.begin(), faces.end());
+  } else {
+    for (long long x = (long long)l.x(); x <= (long long)h.x(); ++x)
+      for (long long y = (long long)l.y(); y <= (long long)h.y(); ++y)
+        for (long long z = (long long)l.z(); z <= (long long)h.z(); ++z) {
+          const std::uint64_t key = cell_key(x, y, z);
+          auto it = std::lower_bound(grid_.begin(), grid_.end(), std::pair<std::uint64_t, int>{key, -1});
+          for (; it != grid_.end() && it->first == key; ++it) out.push_back(it->second);
+          const auto added = added_grid_.find(key);
+          if (added != added_grid_.end()) out.insert(out.end(), added->second.begin(), added->second.end());
+        }
+  }
+  out.insert(out.end(), oversize_.begin(), oversize_.end());
+  std::sort(out.begin() + static_cast<std::ptrdiff_t>(start), out.end());
+  out.erase(std::unique(out.begin() + static_cast<std::ptrdiff_t>(start), out.end()), out.end());
 }
 
 void MeshIndex::add_faces(const TriangleSoup& soup, std::size_t first) {
@@ -42,6 +117,7 @@ void MeshIndex::add_faces(const TriangleSoup& soup, std::size_t first) {
       added_directed_[directed_key(t[k], t[(k + 1) % 3])].push_back(static_cast<int>(f));
       added_vertex_faces_[t[k]].push_back(static_cast<int>(f));
     }
+    grid_insert(soup, static_cast<int>(f), true);
   }
 }
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <cstddef>
 
 #include "s2c/core/mesh.h"
 
@@ -35,6 +36,9 @@ class MeshIndex {
   bool has_edge(int a, int b) const { return edge_faces(a, b) > 0; }
   /// Vertex neighbours of v through its faces (unsorted, unique).
   std::vector<int> neighbours(const TriangleSoup& soup, int v) const;
+  /// Faces whose bounding box may overlap the box [lo, hi] (a superset: grid cells), sorted and
+  /// unique; appended to `out`. Replaces a scan of every face when validating a patch.
+  void faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, std::vector<int>& out) const;
 
  private:
   // The input's faces in flat sorted arrays (one sort instead of millions of hash inserts:
@@ -44,6 +48,15 @@ class MeshIndex {
   std::vector<int> vf_offset_, vf_faces_;                // vertex → faces (CSR)
   std::unordered_map<std::uint64_t, std::vector<int>> added_directed_;
   std::unordered_map<int, std::vector<int>> added_vertex_faces_;
+  // Uniform grid over face bounding boxes (cell ≈ 2 mean edge lengths): (cell key, face) sorted
+  // for the input, a hash map for appended faces; faces spanning too many cells are listed apart.
+  void grid_insert(const TriangleSoup& soup, int f, bool appended);
+  Eigen::Vector3d grid_origin_ = Eigen::Vector3d::Zero();
+  double cell_ = 1;
+  std::vector<std::pair<std::uint64_t, int>> grid_;
+  std::unordered_map<std::uint64_t, std::vector<int>> added_grid_;
+  std::vector<int> oversize_;
+  std::size_t faces_ = 0;
 };
 
 /// A patch under construction. Local vertex l < rim.size() is loop position l (soup vertex

@@ -184,8 +184,11 @@ std::string check_patch(const TriangleSoup& soup, const MeshIndex& index, const 
   for (int f = 0; f < static_cast<int>(tri.size()); ++f)
     if (against_patch(tri[f], ids[f], boxes[f], f, f) >= 0) return "patch intersects itself";
   int tag = static_cast<int>(tri.size());
-  for (std::size_t f = 0; f < soup.faces.size(); ++f) {
-    const auto& t = soup.faces[f];
+  std::vector<int> near;
+  index.faces_near(all.lo, all.hi, near);
+  for (const int f : near) {
+    if (f < 0 || static_cast<std::size_t>(f) >= soup.faces.size()) continue;
+    const auto& t = soup.faces[static_cast<std::size_t>(f)];
     const int nv = static_cast<int>(soup.vertices.size());
     if (std::min({t[0], t[1], t[2]}) < 0 || std::max({t[0], t[1], t[2]}) >= nv) continue;
     const std::array<Eigen::Vector3d, 3> q{soup.vertices[t[0]], soup.vertices[t[1]], soup.vertices[t[2]]};

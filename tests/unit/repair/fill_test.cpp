@@ -49,7 +49,9 @@ std::map<int, int> fans_at(const TriangleSoup& s, int v) {
 // backwards, so triangles (loop[0], loop[i], loop[i+1]) match the faces around. At a vertex with
 // two ways on (a nested hole), it takes the one on another fan of faces, which merges the
 // touching holes into one loop that fills to a manifold vertex.
-std::vector<Hole> trace_holes(const TriangleSoup& s) {
+// `merge_at_shared` = false takes the way on the same fan instead: touching holes stay separate
+// loops that each close their own fan (the pairing fill_holes must repair).
+std::vector<Hole> trace_holes(const TriangleSoup& s, bool merge_at_shared = true) {
   std::set<std::pair<int, int>> half;
   for (const auto& f : s.faces)
     for (int k = 0; k < 3; ++k) half.insert({f[k], f[(k + 1) % 3]});
@@ -73,7 +75,7 @@ std::vector<Hole> trace_holes(const TriangleSoup& s) {
       if (std::distance(range.first, range.second) > 1) {
         const auto fans = fans_at(s, v);
         for (auto c = range.first; c != range.second; ++c)
-          if (fans.at(c->second.second) != fans.at(face)) pick = c;
+          if ((fans.at(c->second.second) != fans.at(face)) == merge_at_shared) pick = c;
       }
       const int w = pick->second.first;
       face = pick->second.second;
@@ -488,6 +490,107 @@ TEST(Fill, SeveralHolesInOneCallAndNormalsKept) {
   for (const auto& x : r) EXPECT_TRUE(x.filled) << x.reason;
   EXPECT_EQ(s.normals.size(), s.vertices.size());
   expect_cad_ready(s);
+}
+
+
+// ---------------------------------------------------------------------------------------------
+// Shared and pinched rim vertices (real scans: cgal_ALSTOM_TEST4, stanford_bun_zipper_res3,
+// thingi10k_74450)
+
+TEST(Fill, TouchingLoopsThatCloseTheirOwnFansAreMergedAndFillManifold) {
+  // The C-shaped hole traced as two loops (outer rim and island rim) that both pass the shared
+  // vertex (4, 4) and each pair that vertex's edges on one fan: filled as given, the vertex would
+  // end with two fans (and the outer patch would cover the island). fill_holes re-pairs them.
+  TriangleSoup s = c_shaped_hole([](double, double) { return 0.0; });
+  auto holes = trace_holes(s, false);
+  ASSERT_EQ(holes.size(), 3u);  // sheet boundary, outer rim, island rim
+  std::sort(holes.begin(), holes.end(), [](const Hole& a, const Hole& b) { return a.loop.size() < b.loop.size(); });
+  holes.resize(2);
+  for (const auto& h : holes) EXPECT_EQ(std::count(h.loop.begin(), h.loop.end(), 4 * 13 + 4), 1);
+  const std::size_t before = s.vertices.size();
+  const auto r = fill_holes(s, holes);
+  ASSERT_EQ(r.size(), 2u);
+  EXPECT_TRUE(r[0].filled) << r[0].reason;
+  EXPECT_TRUE(r[1].filled) << r[1].reason;
+  EXPECT_NE(r[0].choice.find("merged"), std::string::npos) << r[0].choice;
+  EXPECT_NE(r[1].choice.find("merged into hole 0"), std::string::npos) << r[1].choice;
+  expect_valid_sheet(s);
+  EXPECT_LT(deviation(s, before, [](const Eigen::Vector3d& p) { return p.z(); }).max, 1e-12);
+}
+
+TEST(Fill, LoopPassingAVertexTwiceOnOneFanEachIsSplitAndFillsManifold) {
+  // Two square holes that touch at a corner vertex, given as one loop through that vertex twice
+  // where each pass closes a fan on itself (the cgal_ALSTOM_TEST4 case): as one disc the vertex
+  // would be a pinch. Split there, each square fills and the vertex is manifold.
+  TriangleSoup s = cut_faces(height_grid(8, [](double, double) { return 0.0; }), [](const Eigen::Vector3d& c) {
+    return (c.x() > 2 && c.x() < 4 && c.y() > 2 && c.y() < 4) || (c.x() > 4 && c.x() < 6 && c.y() > 4 && c.y() < 6);
+  });
+  // Traced on the same fan at (4, 4), the two squares become one 16-vertex loop through (4, 4)
+  // twice, each pass pairing two edges of one mesh fan.
+  auto bad = trace_holes(s, false);
+  std::sort(bad.begin(), bad.end(), [](const Hole& a, const Hole& b) { return a.loop.size() < b.loop.size(); });
+  bad.resize(1);
+  ASSERT_EQ(bad[0].loop.size(), 16u);
+  const Hole joined = bad[0];
+  expect_repeated_vertex(joined);
+  const std::size_t before = s.vertices.size();
+  const auto r = fill_holes(s, {joined});
+  ASSERT_TRUE(r[0].filled) << r[0].reason;
+  EXPECT_NE(r[0].choice.find("re-paired"), std::string::npos) << r[0].choice;
+  expect_valid_sheet(s);
+  EXPECT_LT(deviation(s, before, [](const Eigen::Vector3d& p) { return p.z(); }).max, 1e-12);
+}
+
+TEST(Fill, RimVertexThatIsAlreadyAPinchDoesNotBlockTheFill) {
+  // A closed tetrahedron below the sheet touches the hole's rim at one vertex: that vertex has a
+  // closed fan besides the rim's and stays a pinch whatever the patch; the hole must still fill.
+  TriangleSoup s = cut_faces(height_grid(10, [](double, double) { return 0.0; }), [](const Eigen::Vector3d& c) {
+    return c.x() > 3 && c.x() < 7 && c.y() > 3 && c.y() < 7;
+  });
+  const auto holes = grid_hole(s);
+  const int v = 3 * 11 + 3;  // corner (3, 3) of the square hole
+  ASSERT_NE(std::find(holes[0].loop.begin(), holes[0].loop.end(), v), holes[0].loop.end());
+  const int b = static_cast<int>(s.vertices.size());
+  s.vertices.push_back({2, 2, -1});
+  s.vertices.push_back({3, 1.5, -1.5});
+  s.vertices.push_back({1.5, 3, -1.5});
+  for (const auto& f : std::vector<std::array<int, 3>>{{v, b, b + 1}, {v, b + 1, b + 2}, {v, b + 2, b}, {b, b + 2, b + 1}})
+    s.faces.push_back(f);
+  const CheckResult c0 = check_mesh(s);
+  ASSERT_EQ(c0.nonmanifold_vertices, 1u);
+  const auto r = fill_holes(s, holes);
+  ASSERT_TRUE(r[0].filled) << r[0].reason;
+  const CheckResult c = check_mesh(s);
+  EXPECT_EQ(c.boundary_loops, 1u) << to_json(c);  // the sheet's own
+  EXPECT_EQ(c.nonmanifold_edges, 0u);
+  EXPECT_EQ(c.nonmanifold_vertices, 1u);  // the pinch it had
+  EXPECT_EQ(c.self_intersections, 0u);
+}
+
+TEST(Fill, QuadWhoseDiagonalsAreBothMeshEdgesGetsACentreVertex) {
+  // A saddle-shaped 4-vertex hole (a, b, c, d) with a skirt of faces across its rim, and two
+  // flaps that already use both diagonals a-c (below) and b-d (above): no triangle of the rim
+  // alone is legal, a fan around a new centre vertex is.
+  TriangleSoup s;
+  s.vertices = {{0, 0, 0}, {1, 0, 1}, {1, 1, 0}, {0, 1, 1}};  // a b c d
+  const Hole hole{{0, 1, 2, 3}};
+  for (int i = 0; i < 4; ++i) {
+    const int u = hole.loop[i], w = hole.loop[(i + 1) % 4];
+    const Eigen::Vector3d mid = 0.5 * (s.vertices[u] + s.vertices[w]);
+    s.vertices.push_back(mid + 2.0 * Eigen::Vector3d(mid.x() - 0.5, mid.y() - 0.5, 0));
+    s.faces.push_back({w, u, static_cast<int>(s.vertices.size()) - 1});
+  }
+  s.vertices.push_back({0.5, 0.5, -3});
+  s.faces.push_back({0, 2, static_cast<int>(s.vertices.size()) - 1});
+  s.vertices.push_back({0.5, 0.5, 4});
+  s.faces.push_back({1, 3, static_cast<int>(s.vertices.size()) - 1});
+  FillOptions o;
+  o.method = FillMethod::liepa;
+  const auto r = fill_holes(s, {hole}, o);
+  ASSERT_TRUE(r[0].filled) << r[0].reason;
+  EXPECT_GE(r[0].new_vertices, 1u);
+  EXPECT_EQ(check_mesh(s).nonmanifold_edges, 0u);
+  EXPECT_EQ(check_mesh(s).self_intersections, 0u);
 }
 
 }  // namespace

@@ -22,6 +22,7 @@ struct RepairOptions {
   Strategy strategy = Strategy::automatic;
   FillOptions fill;                  ///< hole filling (method none → holes are left to the volumetric step)
   bool fill_holes = true;
+  bool close_gaps = true;
   double gap_tolerance = 0;          ///< mm; 0 = half the mean boundary edge length
   VolumetricOptions volumetric;      ///< voxel 0 = max(longest box side / 320, √(area / 60000))
   /// Decimation after volumetric repair: largest distance a collapse may move the surface,
