@@ -13,13 +13,13 @@
 #   wrap     CGAL 5.5 alpha_wrap_3 (s2c-bench-alpha-wrap, alpha = diag/200, offset = diag/2000) on
 #            each WRAP_INPUTS mesh, then scan2cad repair --strategy volumetric --resolution N for N in
 #            WRAP_RES (ascending; stops at the first N whose Hausdorff to the input is ≤ CGAL's): the
-#            matched-Hausdorff time ratio. Skipped when s2c-bench-alpha-wrap was not built (no CGAL).
+#            matched-Hausdorff time ratio; once per WRAP_EXTRACT (default "mc dc"). Skipped when s2c-bench-alpha-wrap was not built (no CGAL).
 #   vdf      s2c-bench-vdf step; s2c-bench-vdf cad VDF_INPUTS --div 256 --band 3;
 #            s2c-bench-vdf memory MEMORY_INPUT --div 1024 (each alone: nothing else runs meanwhile).
 #
 # Environment: PARTS="plate shaft bracket pocket", SEED=1, OUT=DIR (default: a new /tmp directory),
 # SAMPLES=200000 (per surface, for the distances), WRAP_INPUTS (default: the four fixture parts and
-# the CGAL fandisk), WRAP_RES="320 448 640 896", VDF_INPUTS (default: the fixture parts, cgal_fandisk,
+# the CGAL fandisk), WRAP_RES="320 448 640 896", WRAP_EXTRACT="mc dc", VDF_INPUTS (default: the fixture parts, cgal_fandisk,
 # cgal_part, abc_*), MEMORY_INPUT (default: fixtures/parts/bracket.stl), REAL=../shared/data/real/cad.
 set -uo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -154,6 +154,7 @@ if "wrap" in sections:
         default = [f"fixtures/parts/{p}.stl" for p in parts] + [f"{real}/cgal_fandisk.off"]
         inputs = os.environ.get("WRAP_INPUTS", " ".join(default)).split()
         res_list = [int(r) for r in os.environ.get("WRAP_RES", "320 448 640 896").split()]
+        extracts = os.environ.get("WRAP_EXTRACT", "mc dc").split()
         rows = []
         for src in inputs:
             name = os.path.basename(src)
@@ -170,39 +171,41 @@ if "wrap" in sections:
             rows.append(f"| {name} | CGAL alpha wrap (α {cg['alpha_mm']:.3f}, offset {cg['offset_mm']:.4f}) | — | {cg['seconds']:.2f} | — | "
                         f"{wall_c:.2f} | {mb_c:.0f} | {fmt(cc.get('faces'), ',')} | {'yes' if cc.get('cad_ready') else 'no'} | "
                         f"{fmt(ca.get('chamfer_mm'), '.4f')} | {fmt(h_c, '.4f')} | |")
-            matched = None
-            for res in res_list:
-                log(f"[wrap] {name}: ours --resolution {res}")
-                t = f"{tag}.ours{res}"
-                rc, wall, mb = run([f"{bin_}/scan2cad", "repair", src, "-o", f"{out}/{t}.ply", "--strategy", "volumetric",
-                                    "--resolution", str(res), "--report", f"{out}/{t}.report.json", "--quiet"], None, f"{out}/{t}.log")
-                rep = load(f"{out}/{t}.report.json") or {}
-                if rc != 0:
-                    rows.append(f"| {name} | ours --resolution {res} | failed (exit {rc}) | | | | | | | | | |")
-                    continue
-                vp = rep.get("counts", {}).get("volumetric_path", {})
-                vol = (vp.get("volumetric") or [{}])[-1]
-                core = sum(vol.get(k, 0) for k in ("seconds_field", "seconds_sign", "seconds_extract"))
-                secs = (rep.get("timings_s") or {}).get("repair")
-                a = accuracy(f"{out}/{t}.ply", src, t)
-                c = check(f"{out}/{t}.ply", t)
-                h = a.get("hausdorff_mm", 1e9)
-                hit = h <= h_c
-                steps = vp.get("seconds", {})
-                rows.append(f"| {name} | ours --resolution {res} (voxel {fmt(vp.get('voxel_mm'), '.4f')}) | {core:.2f} | "
-                            f"{fmt(secs, '.2f')} (volumetric {fmt(steps.get('volumetric'), '.1f')}, decimate {fmt(steps.get('decimate'), '.1f')}) | "
-                            f"{cg['seconds'] / secs:.2f}× | {wall:.2f} | {mb:.0f} | {fmt(c.get('faces'), ',')} | "
-                            f"{'yes' if c.get('cad_ready') else 'no'} | {fmt(a.get('chamfer_mm'), '.4f')} | {h:.4f} | "
-                            f"{'**matched**' if hit else ''} |")
-                if hit:
-                    matched = (res, secs, core, wall)
-                    break
-            if matched:
-                res, secs, core, wall = matched
-                rows.append(f"| {name} | *CGAL ÷ ours at matched Hausdorff (res {res})* | *{cg['seconds'] / core:.1f}× (core)* | "
-                            f"*{cg['seconds'] / secs:.2f}× (repair step)* | | *{wall_c / wall:.2f}× (wall)* | | | | | | |")
-            else:
-                rows.append(f"| {name} | *no resolution in {res_list} reached CGAL's Hausdorff* | | | | | | | | | | |")
+            for extract in extracts:
+                matched = None
+                for res in res_list:
+                    log(f"[wrap] {name}: ours --extract {extract} --resolution {res}")
+                    t = f"{tag}.ours.{extract}{res}"
+                    rc, wall, mb = run([f"{bin_}/scan2cad", "repair", src, "-o", f"{out}/{t}.ply", "--strategy", "volumetric",
+                                        "--extract", extract, "--resolution", str(res), "--report", f"{out}/{t}.report.json",
+                                        "--quiet"], None, f"{out}/{t}.log")
+                    rep = load(f"{out}/{t}.report.json") or {}
+                    if rc != 0:
+                        rows.append(f"| {name} | ours {extract} --resolution {res} | failed (exit {rc}) | | | | | | | | | |")
+                        continue
+                    vp = rep.get("counts", {}).get("volumetric_path", {})
+                    vol = (vp.get("volumetric") or [{}])[-1]
+                    core = sum(vol.get(k, 0) for k in ("seconds_field", "seconds_sign", "seconds_extract"))
+                    secs = (rep.get("timings_s") or {}).get("repair")
+                    a = accuracy(f"{out}/{t}.ply", src, t)
+                    c = check(f"{out}/{t}.ply", t)
+                    h = a.get("hausdorff_mm", 1e9)
+                    hit = h <= h_c
+                    steps = vp.get("seconds", {})
+                    rows.append(f"| {name} | ours {extract} --resolution {res} (voxel {fmt(vp.get('voxel_mm'), '.4f')}) | {core:.2f} | "
+                                f"{fmt(secs, '.2f')} (volumetric {fmt(steps.get('volumetric'), '.1f')}, decimate {fmt(steps.get('decimate'), '.1f')}) | "
+                                f"{cg['seconds'] / secs:.2f}× | {wall:.2f} | {mb:.0f} | {fmt(c.get('faces'), ',')} | "
+                                f"{'yes' if c.get('cad_ready') else 'no'} | {fmt(a.get('chamfer_mm'), '.4f')} | {h:.4f} | "
+                                f"{'**matched**' if hit else ''} |")
+                    if hit:
+                        matched = (res, secs, core, wall)
+                        break
+                if matched:
+                    res, secs, core, wall = matched
+                    rows.append(f"| {name} | *CGAL ÷ ours {extract} at matched Hausdorff (res {res})* | *{cg['seconds'] / core:.1f}× (core)* | "
+                                f"*{cg['seconds'] / secs:.2f}× (repair step)* | | *{wall_c / wall:.2f}× (wall)* | | | | | | |")
+                else:
+                    rows.append(f"| {name} | *ours {extract}: no resolution in {res_list} reached CGAL's Hausdorff* | | | | | | | | | | |")
         print("### Anchor: CGAL 5.5 alpha_wrap_3 (α = diag/200, offset = diag/2000) vs scan2cad repair --strategy volumetric")
         print()
         print("Distances to the input mesh. `core s` = VDF field + sign + Marching Cubes (report `seconds_field/sign/extract`); "

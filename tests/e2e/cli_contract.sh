@@ -39,6 +39,19 @@ printf '0.0 depth/000000.png\n1.0 depth/999.png\n' > "$work/badstream/depth.txt"
 expect_rc 2 "reconstruct with a missing frame" "$bin/scan2cad" reconstruct "$work/badstream" -o "$work/rec.ply"
 grep -q "999.png" "$work/stderr" || fail "reconstruct's message does not name the frame"
 [[ ! -e "$work/rec.ply" ]] || fail "reconstruct left output after a bad frame"
+expect_rc 2 "repair on a bad mesh" "$bin/scan2cad" repair "$work/bad.off" -o "$work/rep.ply"
+grep -q "bad.off" "$work/stderr" || fail "repair's message does not name the file"
+[[ ! -e "$work/rep.ply" ]] || fail "repair left output after bad input"
+expect_rc 2 "repair to an unknown format" "$bin/scan2cad" repair "$src/fixtures/parts/plate.stl" -o "$work/rep.xyz"
+expect_rc 2 "repair onto its own input" "$bin/scan2cad" repair "$work/bad.off" -o "$work/bad.off"
+expect_rc 2 "repair with --voxel and --resolution" "$bin/scan2cad" repair "$src/fixtures/parts/plate.stl" -o "$work/rep.ply" \
+  --voxel 0.5 --resolution 100
+# A mesh that cannot become CAD-ready under the asked strategy: exit 3, report written, no mesh.
+printf 'OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n' > "$work/tri.off"
+expect_rc 3 "repair --strategy surface --holes none on an open triangle" "$bin/scan2cad" repair "$work/tri.off" \
+  -o "$work/rep.ply" --strategy surface --holes none --report "$work/rep.json"
+[[ ! -e "$work/rep.ply" ]] || fail "repair wrote a mesh that is not CAD-ready"
+[[ -s "$work/rep.json" ]] || fail "repair wrote no report on failure"
 expect_rc 2 "run on a missing input" "$bin/scan2cad" run "$work/nothing.stl" --out "$work/run_out"
 cmp -s "$work/bad.off" "$work/bad.copy" || fail "an input was modified"
 ls -a "$work" | grep -q "\.tmp-" && fail "a temporary file was left behind"

@@ -11,6 +11,7 @@
 
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
+#include <Eigen/SparseLU>
 
 namespace s2c::repair::fill {
 namespace {
@@ -387,6 +388,12 @@ bool fair(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, bool t
   std::vector<Eigen::Vector3d> rhs;
   int row = 0;
   std::vector<double> weights;
+  std::unordered_map<int, int> row_of;  // node → its row of A
+  struct Term {
+    int center, other;
+    double w;
+  };
+  std::vector<Term> umbrella;
   for (auto& [center, list] : nbrs) {
     std::sort(list.begin(), list.end());
     list.erase(std::unique(list.begin(), list.end()), list.end());
@@ -408,12 +415,41 @@ bool fair(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, bool t
     add(center, -1.0);
     for (std::size_t k = 0; k < list.size(); ++k) add(list[k], weights[k] / total);
     rhs.push_back(b);
+    row_of[center] = row;
+    for (std::size_t k = 0; k < list.size(); ++k) umbrella.push_back({center, list[k], weights[k] / total});
     ++row;
   }
   Eigen::SparseMatrix<double> A(row, unknowns);
   A.setFromTriplets(trip.begin(), trip.end());
   Eigen::MatrixXd B(row, 3);
   for (int r = 0; r < row; ++r) B.row(r) = rhs[r].transpose();
+  if (tangent_continuous) {
+    // CGAL's k = 2 fairing: U(U(x)) = 0 at every new vertex, U at the rim including its mesh
+    // ring (fixed). With W the umbrella rows of the new vertices over the rows of A:
+    // W (A x + B) = 0, a square nonsymmetric system (sparse LU).
+    std::vector<Eigen::Triplet<double>> wt;
+    for (const auto& [center, r] : row_of)
+      if (center >= patch.base) wt.emplace_back(center - patch.base, r, -1.0);
+    for (const Term& t : umbrella) {
+      if (t.center < patch.base) continue;
+      const auto it = row_of.find(t.other);
+      if (it != row_of.end()) wt.emplace_back(t.center - patch.base, it->second, t.w);
+    }
+    Eigen::SparseMatrix<double> W(unknowns, row);
+    W.setFromTriplets(wt.begin(), wt.end());
+    const Eigen::SparseMatrix<double> M = W * A;
+    Eigen::SparseLU<Eigen::SparseMatrix<double>> lu;
+    lu.analyzePattern(M);
+    lu.factorize(M);
+    if (lu.info() == Eigen::Success) {
+      const Eigen::MatrixXd X = lu.solve(-(W * B));
+      if (lu.info() == Eigen::Success && X.allFinite()) {
+        for (int u = 0; u < unknowns; ++u) patch.points[n + u] = X.row(u).transpose();
+        return true;
+      }
+    }
+    // Singular (should not happen on a connected patch): the least-squares form below.
+  }
   const Eigen::SparseMatrix<double> AtA = A.transpose() * A;
   // AᵀA is symmetric positive definite: every new vertex is connected to the fixed rim, so A has
   // full column rank (the harmonic A is square and nonsingular, the bi-Laplacian adds rows).
