@@ -10,11 +10,15 @@
 
 namespace s2c::repair {
 
-std::size_t decimate(TriangleSoup& soup, double tolerance) {
+std::size_t decimate(TriangleSoup& soup, double tolerance, const std::vector<char>* locked) {
   if (!(tolerance > 0) || soup.faces.empty()) return 0;
   Mesh mesh;
   soup_to_mesh(soup, mesh);
   mesh.update_face_normals();
+  // soup_to_mesh keeps vertex indices (duplicates for non-manifold corners come after them).
+  if (locked)
+    for (std::size_t v = 0; v < locked->size() && v < mesh.n_vertices(); ++v)
+      if ((*locked)[v]) mesh.status(Mesh::VertexHandle(static_cast<int>(v))).set_locked(true);
   using Decimater = OpenMesh::Decimater::DecimaterT<Mesh>;
   Decimater dec(mesh);
   OpenMesh::Decimater::ModQuadricT<Mesh>::Handle quadric;

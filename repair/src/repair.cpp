@@ -1,6 +1,7 @@
 // The repair driver: surface repair when it suffices, volumetric repair when it does not.
 #include "s2c/repair/repair.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -215,23 +216,25 @@ TriangleSoup volumetric_repair(const std::vector<const TriangleSoup*>& inputs, c
   const double voxel = rep["voxel_mm"].get<double>();
   if (o.decimate_tolerance_voxels > 0) {
     // Quadric decimation does not look at the far side of thin walls: a collapse can push a face
-    // through it. Such faces are cut out and the holes patched, as in surface repair; if that
-    // does not give a CAD-ready mesh, a smaller tolerance is tried, and finally none.
+    // through it. Where that happens, the vertices of the full-resolution mesh around the
+    // crossing are locked and the decimation is redone, up to three times; then the remaining
+    // crossings are cut out and patched; failing all that, the mesh stays undecimated.
     nlohmann::json tries = nlohmann::json::array();
-    for (double factor : {1.0, 0.3}) {
+    const double tol = o.decimate_tolerance_voxels * voxel;
+    std::vector<char> locked(out.vertices.size(), 0);
+    for (int round = 0; round < 4; ++round) {
       TriangleSoup dec = out;
-      const double tol = factor * o.decimate_tolerance_voxels * voxel;
-      const std::size_t removed = decimate(dec, tol);
-      std::size_t pairs = self_intersecting_pairs(dec).size();
+      const std::size_t removed = decimate(dec, tol, &locked);
+      const auto pairs = self_intersecting_pairs(dec);
       nlohmann::json t = {{"tolerance_mm", tol}, {"faces_removed", removed}, {"faces", dec.faces.size()},
-                          {"self_intersections", pairs}};
-      bool ok = pairs == 0;
-      if (!ok) {
+                          {"self_intersections", pairs.size()}, {"locked_vertices", std::count(locked.begin(), locked.end(), 1)}};
+      bool ok = pairs.empty();
+      if (!ok && round == 3) {
         nlohmann::json fix;
-        for (int round = 0; round < 2 && !ok; ++round) {
+        for (int r = 0; r < 2 && !ok; ++r) {
           cut_out_bad_faces(dec, true);
           clean(dec);
-          close_and_fill(dec, o, fix, round + 1);
+          close_and_fill(dec, o, fix, r + 1);
           ok = check_mesh(dec).cad_ready;
         }
         t["patched"] = ok;
@@ -241,6 +244,20 @@ TriangleSoup volumetric_repair(const std::vector<const TriangleSoup*>& inputs, c
         out = std::move(dec);
         break;
       }
+      // Lock the full-resolution vertices within a few voxels of every crossing.
+      std::vector<Eigen::Vector3d> spots;
+      for (const auto& [a, b] : pairs)
+        for (int f : {a, b}) {
+          const auto& tri = dec.faces[f];
+          for (int k = 0; k < 3; ++k) spots.push_back(dec.vertices[tri[k]]);
+        }
+      const double r2 = std::pow((3.0 + 3.0 * round) * voxel, 2);
+      for (std::size_t v = 0; v < out.vertices.size(); ++v)
+        for (const auto& p : spots)
+          if ((out.vertices[v] - p).squaredNorm() < r2) {
+            locked[v] = 1;
+            break;
+          }
     }
     rep["decimate"] = tries;
   }

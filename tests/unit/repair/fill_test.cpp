@@ -594,5 +594,39 @@ TEST(Fill, QuadWhoseDiagonalsAreBothMeshEdgesGetsACentreVertex) {
   EXPECT_EQ(check_mesh(s).self_intersections, 0u);
 }
 
+TEST(Fill, MeshIndexGridFindsEveryFaceNearABoxIncludingAppendedOnes) {
+  // The validation's broad phase (replaces a scan of all faces per hole): every face whose box
+  // overlaps the query box must be returned, also faces appended after the index was built.
+  TriangleSoup s = test::icosphere({0, 0, 0}, 10, 3);
+  fill::MeshIndex index(s);
+  const int b = static_cast<int>(s.vertices.size());
+  s.vertices.push_back({-30, -30, 0});
+  s.vertices.push_back({30, -30, 0});
+  s.vertices.push_back({0, 30, 0});  // a big triangle across everything
+  s.vertices.push_back({3, 3, 9});
+  s.vertices.push_back({3.2, 3, 9});
+  s.vertices.push_back({3, 3.2, 9});
+  const std::size_t first = s.faces.size();
+  s.faces.push_back({b, b + 1, b + 2});
+  s.faces.push_back({b + 3, b + 4, b + 5});
+  index.add_faces(s, first);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-12, 12), w(0, 4);
+  for (int q = 0; q < 200; ++q) {
+    const Eigen::Vector3d lo(u(rng), u(rng), u(rng)), hi = lo + Eigen::Vector3d(w(rng), w(rng), w(rng));
+    std::vector<int> near;
+    index.faces_near(lo, hi, near);
+    ASSERT_TRUE(std::is_sorted(near.begin(), near.end()));
+    for (int f = 0; f < static_cast<int>(s.faces.size()); ++f) {
+      const auto& t = s.faces[f];
+      const Eigen::Vector3d a = s.vertices[t[0]].cwiseMin(s.vertices[t[1]]).cwiseMin(s.vertices[t[2]]);
+      const Eigen::Vector3d c = s.vertices[t[0]].cwiseMax(s.vertices[t[1]]).cwiseMax(s.vertices[t[2]]);
+      const bool overlaps = (a.array() <= hi.array()).all() && (lo.array() <= c.array()).all();
+      EXPECT_TRUE(!overlaps || std::binary_search(near.begin(), near.end(), f)) << "face " << f << " query " << q;
+    }
+    EXPECT_LT(near.size(), s.faces.size());  // a broad phase, not everything
+  }
+}
+
 }  // namespace
 }  // namespace s2c::repair

@@ -58,6 +58,11 @@ struct FillResult {
 /// Fills the holes of `soup` in place: appends vertices and faces. Every patch is a manifold
 /// disc attached to its rim, free of self-intersections and of intersections with the mesh
 /// around it; a hole whose patch fails that test is left open with a reason.
+/// Where loops share a rim vertex and their pairing of its rim edges would close a fan of faces
+/// on itself (leaving a pinch), the loops are first re-paired there: split, or merged with
+/// another hole (that hole's result then says "merged into hole i"); one result per input hole
+/// either way. A loop through a vertex twice that still cannot be filled is split there. A rim
+/// vertex that already had several fans (a pinch no patch can undo) does not block the fill.
 std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& holes,
                                    const FillOptions& options = {});
 

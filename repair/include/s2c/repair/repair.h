@@ -44,8 +44,9 @@ RepairResult repair_mesh(const TriangleSoup& input, const RepairOptions& options
 
 /// Quadric-error decimation (OpenMesh Decimater) that never flips a normal, keeps the mesh
 /// manifold and stops when the next collapse would move the surface more than `tolerance` mm.
+/// Vertices marked in `locked` (by index, optional) are never moved or removed.
 /// Returns the number of faces removed.
-std::size_t decimate(TriangleSoup& soup, double tolerance);
+std::size_t decimate(TriangleSoup& soup, double tolerance, const std::vector<char>* locked = nullptr);
 
 const char* to_string(Strategy s);
 
