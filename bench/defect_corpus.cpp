@@ -5,6 +5,8 @@
 // and tried at the next site.
 #include "defect_corpus.h"
 
+#include "common/sampling.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -24,16 +26,9 @@ namespace {
 using Eigen::Vector3d;
 using Tri = std::array<int, 3>;
 
-/// splitmix64: the same numbers on every platform and standard library.
-struct Rng {
-  std::uint64_t state;
-  std::uint64_t next() {
-    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  double uniform() { return static_cast<double>(next() >> 11) * (1.0 / 9007199254740992.0); }
+/// The benchmarks' SplitMix64, with an index draw.
+struct CorpusRng : s2c::bench::Rng {
+  explicit CorpusRng(std::uint64_t seed) : s2c::bench::Rng{seed} {}
   std::size_t index(std::size_t n) { return static_cast<std::size_t>(next() % n); }
 };
 
@@ -234,7 +229,7 @@ struct Plane {
 class Builder {
  public:
   Builder(TriangleSoup base, const DefectOptions& options, double edge)
-      : base_(std::move(base)), options_(options), edge_(edge), rng_{options.seed * 0x2545F4914F6CDD1Dull + 17} {
+      : base_(std::move(base)), options_(options), edge_(edge), rng_(options.seed * 0x2545F4914F6CDD1Dull + 17) {
     const Bounds b = bounds(base_);
     diag_ = b.diagonal();
     // The gap: a plane section across the longest extent, placed (among seeded candidates)
@@ -393,7 +388,7 @@ class Builder {
     return true;
   }
 
-  void duplicate_faces(TriangleSoup& s, std::size_t count, Rng& rng) const {
+  void duplicate_faces(TriangleSoup& s, std::size_t count, CorpusRng& rng) const {
     const std::size_t n = s.faces.size();
     std::unordered_set<std::size_t> chosen;
     while (chosen.size() < count) {
@@ -467,7 +462,7 @@ class Builder {
   TriangleSoup base_;
   const DefectOptions& options_;
   double edge_, diag_ = 0;
-  Rng rng_;
+  CorpusRng rng_;
   Plane gap_plane_;
   std::vector<int> sites_;
 };
@@ -525,7 +520,7 @@ DefectCorpus make_defect_corpus(const TriangleSoup& clean, const DefectOptions& 
          "a self-intersecting patch");
     v.defects["self_intersecting_patches"] += 1;
   };
-  Rng dup_rng{options.seed ^ 0xD1B54A32D192ED03ull};
+  CorpusRng dup_rng(options.seed ^ 0xD1B54A32D192ED03ull);
   auto duplicates = [&](DefectVariant& v) {
     b.duplicate_faces(v.soup, 5, dup_rng);
     v.defects["duplicate_faces"] += 5;

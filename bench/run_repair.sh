@@ -15,12 +15,13 @@
 #            WRAP_RES (ascending; stops at the first N whose Hausdorff to the input is ≤ CGAL's): the
 #            matched-Hausdorff time ratio; once per WRAP_EXTRACT (default "mc dc"). Skipped when s2c-bench-alpha-wrap was not built (no CGAL).
 #   vdf      s2c-bench-vdf step; s2c-bench-vdf cad VDF_INPUTS --div 256 --band 3;
-#            s2c-bench-vdf memory MEMORY_INPUT --div 1024 (each alone: nothing else runs meanwhile).
+#            s2c-bench-vdf memory MESH --div 1024 for each MEMORY_INPUTS (each alone: nothing else runs meanwhile).
 #
 # Environment: PARTS="plate shaft bracket pocket", SEED=1, OUT=DIR (default: a new /tmp directory),
 # SAMPLES=200000 (per surface, for the distances), WRAP_INPUTS (default: the four fixture parts and
 # the CGAL fandisk), WRAP_RES="320 448 640 896", WRAP_EXTRACT="mc dc", VDF_INPUTS (default: the fixture parts, cgal_fandisk,
-# cgal_part, abc_*), MEMORY_INPUT (default: fixtures/parts/bracket.stl), REAL=../shared/data/real/cad.
+# cgal_part, abc_*), MEMORY_INPUTS (default: bracket.stl and abc_00000009, the widest band at
+# --div 256), REAL=../shared/data/real/cad.
 set -uo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
@@ -222,10 +223,13 @@ if "vdf" in sections:
     default = [f"fixtures/parts/{p}.stl" for p in parts] + [f"{real}/cgal_fandisk.off", f"{real}/cgal_part.off"] + \
         sorted(glob.glob(f"{real}/abc_*.stl"))
     inputs = os.environ.get("VDF_INPUTS", " ".join(default)).split()
-    mem_in = os.environ.get("MEMORY_INPUT", "fixtures/parts/bracket.stl")
-    for title, cmd, tag in (("step experiment", [f"{bin_}/s2c-bench-vdf", "step"], "vdf_step"),
-                            ("equal voxel vs OpenVDB", [f"{bin_}/s2c-bench-vdf", "cad", *inputs, "--div", "256", "--band", "3"], "vdf_cad"),
-                            ("memory at 1024³ equivalent", [f"{bin_}/s2c-bench-vdf", "memory", mem_in, "--div", "1024"], "vdf_memory")):
+    mem_default = f"fixtures/parts/bracket.stl {real}/abc_00000009_9b3d6a97e8de4aa193b81000_trimesh_001.stl"
+    runs = [("step experiment", [f"{bin_}/s2c-bench-vdf", "step"], "vdf_step"),
+            ("equal voxel vs OpenVDB", [f"{bin_}/s2c-bench-vdf", "cad", *inputs, "--div", "256", "--band", "3"], "vdf_cad")]
+    for i, mem_in in enumerate(os.environ.get("MEMORY_INPUTS", mem_default).split()):
+        runs.append((f"memory at 1024³ equivalent ({os.path.basename(mem_in)})",
+                     [f"{bin_}/s2c-bench-vdf", "memory", mem_in, "--div", "1024"], f"vdf_memory{i}"))
+    for title, cmd, tag in runs:
         log(f"[vdf] {title}")
         rc, wall, mb = run(cmd, f"{out}/{tag}.md", f"{out}/{tag}.log")
         shown = " ".join(c.replace(os.getcwd() + "/", "") for c in cmd)

@@ -161,13 +161,13 @@ int run_cad(const std::vector<std::string>& meshes, double div, double band) {
     o.interp = Interp::linear;
     const auto d_lin = s2c::bench::surface_distance(volumetric_remesh(in, o), in);
     std::string name = path.substr(path.find_last_of('/') + 1);
-    std::printf("| %s | %zu | %.3f | %zu | %.1f | %.2f | %.4f | %.3f | %.4f | %.1f | %.4f | %.1f |", name.c_str(),
+    std::printf("| %s | %zu | %.3g | %zu | %.1f | %.2f | %.3g | %.3g | %.3g | %.1f | %.3g | %.1f |", name.c_str(),
                 in.faces.size(), o.voxel, st.band_vertices, double(st.bytes) / double(st.band_vertices), t_ours,
                 d_ours.chamfer, d_ours.hausdorff, d_lin.chamfer, mc_edge, d_dc.chamfer, dc_edge);
 #ifdef S2C_HAVE_OPENVDB
     const auto vdb = s2c::bench::openvdb_remesh(in, o.voxel, band);
     const auto d_vdb = s2c::bench::surface_distance(vdb.mesh, in);
-    std::printf(" %zu | %.2f | %.2f | %.4f | %.2f | %.2f |\n", vdb.active_voxels, vdb.seconds_to_volume,
+    std::printf(" %zu | %.2f | %.2f | %.3g | %.2f | %.2f |\n", vdb.active_voxels, vdb.seconds_to_volume,
                 vdb.seconds_to_mesh, d_vdb.chamfer, d_ours.chamfer / d_vdb.chamfer,
                 t_ours / (vdb.seconds_to_volume + vdb.seconds_to_mesh));
 #else

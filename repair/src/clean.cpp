@@ -59,23 +59,8 @@ std::size_t remove_tiny_components(TriangleSoup& soup) {
   int count = 0;
   const std::vector<int> comp = face_components(soup, count);
   if (count < 2) return 0;
-  std::vector<double> area(count, 0.0);
-  std::vector<char> open(count, 0);
-  double total = 0;
-  for (std::size_t fi = 0; fi < soup.faces.size(); ++fi) {
-    const double a = face_area(soup, static_cast<int>(fi));
-    area[comp[fi]] += a;
-    total += a;
-  }
-  for (const auto& [key, faces] : edge_faces(soup))
-    if (faces.size() == 1) open[comp[faces[0]]] = 1;
-  std::size_t removed = 0;
-  std::vector<char> drop(count, 0);
-  for (int c = 0; c < count; ++c)
-    if (open[c] && area[c] < 0.005 * total) {
-      drop[c] = 1;
-      ++removed;
-    }
+  const std::vector<char> drop = tiny_open_components(soup, comp, count);
+  const auto removed = static_cast<std::size_t>(std::count(drop.begin(), drop.end(), 1));
   std::size_t w = 0;
   for (std::size_t fi = 0; fi < soup.faces.size(); ++fi)
     if (!drop[comp[fi]]) soup.faces[w++] = soup.faces[fi];

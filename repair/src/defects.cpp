@@ -114,17 +114,8 @@ DefectReport find_defects(const TriangleSoup& soup, bool self_intersections) {
   int count = 0;
   const std::vector<int> comp = face_components(soup, count);
   if (count > 1) {
-    std::vector<double> area(count, 0.0);
-    std::vector<char> open(count, 0);
-    double total = 0;
-    for (std::size_t fi = 0; fi < soup.faces.size(); ++fi) {
-      const double a = face_area(soup, static_cast<int>(fi));
-      area[comp[fi]] += a;
-      total += a;
-    }
-    for (const auto& [key, faces] : edges)
-      if (faces.size() == 1) open[comp[faces[0]]] = 1;
-    for (int c = 0; c < count; ++c) r.tiny_components += open[c] && area[c] < 0.005 * total;
+    const std::vector<char> tiny = tiny_open_components(soup, comp, count);
+    r.tiny_components = static_cast<std::size_t>(std::count(tiny.begin(), tiny.end(), 1));
   }
   r.gap_tolerance = boundary.empty() ? 0 : 0.5 * boundary_len / double(boundary.size());
   r.gaps = count_gap_vertices(soup, boundary, r.gap_tolerance);

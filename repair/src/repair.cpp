@@ -169,7 +169,6 @@ TriangleSoup volumetric_repair(const std::vector<const TriangleSoup*>& inputs, c
   for (std::size_t k = 0; k < inputs.size(); ++k) {
     const TriangleSoup& soup = *inputs[k];
     VolumetricOptions vo = o.volumetric;
-    const Bounds b = bounds(soup);
     if (!(vo.voxel > 0) && vo.resolution <= 0) vo.voxel = default_voxel(soup);
     // What is asked first; then Marching Cubes (dual contouring can pinch two sheets of one cell
     // into a non-manifold edge); then the linear edge point.

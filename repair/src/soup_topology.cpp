@@ -40,6 +40,22 @@ double face_area(const TriangleSoup& soup, int face) {
   return 0.5 * (soup.vertices[f[1]] - soup.vertices[f[0]]).cross(soup.vertices[f[2]] - soup.vertices[f[0]]).norm();
 }
 
+std::vector<char> tiny_open_components(const TriangleSoup& soup, const std::vector<int>& comp, int count,
+                                       double fraction) {
+  std::vector<double> area(count, 0.0);
+  std::vector<char> open(count, 0), tiny(count, 0);
+  double total = 0;
+  for (std::size_t fi = 0; fi < soup.faces.size(); ++fi) {
+    const double a = face_area(soup, static_cast<int>(fi));
+    area[comp[fi]] += a;
+    total += a;
+  }
+  for (const auto& [key, faces] : edge_faces(soup))
+    if (faces.size() == 1) open[comp[faces[0]]] = 1;
+  for (int c = 0; c < count; ++c) tiny[c] = open[c] && area[c] < fraction * total;
+  return tiny;
+}
+
 bool zero_area(const TriangleSoup& soup, int face) {
   const auto& f = soup.faces[face];
   if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) return true;

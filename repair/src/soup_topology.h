@@ -23,6 +23,11 @@ std::vector<int> face_components(const TriangleSoup& soup, int& count);
 
 double face_area(const TriangleSoup& soup, int face);
 
+/// Per component (ids of face_components): open (has a boundary edge) and with less than
+/// `fraction` of the total area. Such components are scanner fragments and loose triangles.
+std::vector<char> tiny_open_components(const TriangleSoup& soup, const std::vector<int>& comp, int count,
+                                       double fraction = 0.005);
+
 /// Exactly collinear corners (or repeated indices).
 bool zero_area(const TriangleSoup& soup, int face);
 
