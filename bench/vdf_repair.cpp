@@ -209,9 +209,9 @@ int run_remesh(const std::string& in_path, const std::string& out_path, double d
   const s2c::CheckResult c = s2c::check_mesh(out);
   std::printf("%s\nregions %zu mixed %zu winding evaluations %zu attempts %d shell %g\n", s2c::to_json(c).c_str(),
               st.sign_regions, st.sign_regions_mixed, st.sign_queries, st.attempts, st.shell);
-  for (const auto& [a, b] : c.intersecting_pairs) {
-    std::printf("pair %d %d\n", a, b);
-    for (int f : {a, b})
+  for (const auto& [fa, fb] : c.intersecting_pairs) {
+    std::printf("pair %d %d\n", fa, fb);
+    for (int f : {fa, fb})
       for (int k = 0; k < 3; ++k) {
         const auto& v = out.vertices[out.faces[f][k]];
         std::printf("  f%d v%d (%.9g %.9g %.9g)\n", f, out.faces[f][k], v.x(), v.y(), v.z());
