@@ -19,12 +19,12 @@
 #
 # Environment: PARTS="plate shaft bracket pocket", SEED=1, OUT=DIR (default: a new /tmp directory),
 # SAMPLES=200000 (per surface, for the distances), WRAP_INPUTS (default: the four fixture parts and
-# the CGAL fandisk), WRAP_RES="320 448 640 896", WRAP_EXTRACT="mc dc", VDF_INPUTS (default: the fixture parts, cgal_fandisk,
+# the CGAL fandisk), WRAP_RES="192 320 448 640 896", WRAP_EXTRACT="mc dc", VDF_INPUTS (default: the fixture parts, cgal_fandisk,
 # cgal_part, abc_*), MEMORY_INPUTS (default: bracket.stl and abc_00000009, the widest band at
 # --div 256), REAL=../shared/data/real/cad.
 set -uo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-cd "$root"
+cd "$root" || exit 2
 build="${1:-build}"
 bin="$build/bin"
 out="${OUT:-$(mktemp -d /tmp/s2c-bench-repair.XXXXXX)}"
@@ -154,7 +154,7 @@ if "wrap" in sections:
     else:
         default = [f"fixtures/parts/{p}.stl" for p in parts] + [f"{real}/cgal_fandisk.off"]
         inputs = os.environ.get("WRAP_INPUTS", " ".join(default)).split()
-        res_list = [int(r) for r in os.environ.get("WRAP_RES", "320 448 640 896").split()]
+        res_list = [int(r) for r in os.environ.get("WRAP_RES", "192 320 448 640 896").split()]
         extracts = os.environ.get("WRAP_EXTRACT", "mc dc").split()
         rows = []
         for src in inputs:
