@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
   app.add_option("--holes", holes, "Hole filling: auto (per hole), rbf, liepa, none (leave holes to volumetric)")
       ->check(CLI::IsMember({"auto", "rbf", "liepa", "none"}))->capture_default_str();
   app.add_option("--gap", o.gap_tolerance, "Close gaps up to this width, mm (default: half the mean boundary edge)");
-  auto* voxel = app.add_option("--voxel", o.volumetric.voxel, "Volumetric grid spacing, mm (default: longest side / 320, at most sqrt(area / 60000))");
+  auto* voxel = app.add_option("--voxel", o.volumetric.voxel, "Volumetric grid spacing, mm (default: longest side / 320, coarsened to sqrt(area / 60000) for large surfaces)");
   app.add_option("--resolution", o.volumetric.resolution, "Volumetric cells along the longest side (instead of --voxel)")
       ->excludes(voxel);
   app.add_option("--band", o.volumetric.band, "Narrow band half width, voxels")->capture_default_str();

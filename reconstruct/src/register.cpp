@@ -43,9 +43,9 @@ CloudPN::Ptr prepare(const View& v, double voxel) {
   auto down = std::make_shared<CloudPN>(voxel_downsample(*raw, voxel));
   // Six unknowns need a few thousand well-spread points, not a room's worth: coarsen the grid
   // (not a stride, which would thin the density that overlap tests rely on).
-  for (double v = voxel; down->size() > kMaxRegistrationPoints;) {
-    v *= std::sqrt(static_cast<double>(down->size()) / kMaxRegistrationPoints);
-    *down = voxel_downsample(*raw, v);
+  for (double cell = voxel; down->size() > kMaxRegistrationPoints;) {
+    cell *= std::sqrt(static_cast<double>(down->size()) / kMaxRegistrationPoints);
+    *down = voxel_downsample(*raw, cell);
   }
   pcl::NormalEstimationOMP<PN, pcl::Normal> ne(2);
   ne.setInputCloud(down);

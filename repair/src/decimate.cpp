@@ -1,14 +1,10 @@
 // Feature-preserving decimation with OpenMesh's Decimater: quadric error (Garland & Heckbert)
 // bounded by a distance, so sharp edges (where planes meet) keep their vertices, and no collapse
 // that turns a face normal by more than 45° (no flips, no folds).
-// OpenMesh's decimater templates trip GCC 12's -Wmaybe-uninitialized inside std::allocator.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <OpenMesh/Tools/Decimater/DecimaterT.hh>
 #include <OpenMesh/Tools/Decimater/ModAspectRatioT.hh>
 #include <OpenMesh/Tools/Decimater/ModNormalFlippingT.hh>
 #include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
-#pragma GCC diagnostic pop
 
 #include "s2c/repair/repair.h"
 

@@ -9,6 +9,7 @@
 #include <spdlog/spdlog.h>
 
 #include "s2c/core/errors.h"
+#include "s2c/core/progress.h"
 #include "s2c/repair/defects.h"
 #include "s2c/repair/gaps.h"
 #include "s2c/repair/holes.h"
@@ -279,7 +280,9 @@ RepairResult repair_mesh(const TriangleSoup& input, const RepairOptions& o) {
   RepairResult res;
   nlohmann::json& rep = res.report;
   auto t0 = Clock::now();
+  Progress progress("repair steps", 4);  // defects, surface, volumetric, final check
   const DefectReport before = find_defects(input);
+  progress.advance();
   rep["defects_before"] = to_json(before);
   rep["seconds"]["defects_before"] = since(t0);
   if (before.check.cad_ready && o.strategy != Strategy::volumetric) {
@@ -298,6 +301,9 @@ RepairResult repair_mesh(const TriangleSoup& input, const RepairOptions& o) {
     nlohmann::json srep;
     surface_check = surface_repair(surface, o, srep);
     surface_ok = surface_check.cad_ready;
+    if (!surface_ok)
+      spdlog::info("surface repair is not enough ({}); rebuilding the surface volumetrically",
+                   surface_check.problems.empty() ? "non-manifold input" : surface_check.problems.front());
     if (!surface_ok && o.close_gaps && srep.contains("gaps") && srep["gaps"]["contractions"].get<std::size_t>() > 0) {
       // Gap closing can zip a narrow hole's rim onto itself and fold it; try again without it.
       RepairOptions no_gaps = o;
@@ -334,10 +340,12 @@ RepairResult repair_mesh(const TriangleSoup& input, const RepairOptions& o) {
     std::vector<const TriangleSoup*> inputs;
     if (use_surface) inputs.push_back(&surface);
     inputs.push_back(&input);
+    progress.advance();  // the surface step
     res.mesh = volumetric_repair(inputs, o, vrep);
     rep["volumetric_path"] = vrep;
     res.path = "volumetric";
   }
+  progress.advance(res.path == "volumetric" ? 1 : 2);  // the volumetric step, or both steps, are behind
   // Stage files store float coordinates (OpenMesh's PLY writer): judge what will be written.
   for (auto& v : res.mesh.vertices) v = v.cast<float>().cast<double>();
   t0 = Clock::now();
@@ -346,6 +354,7 @@ RepairResult repair_mesh(const TriangleSoup& input, const RepairOptions& o) {
   rep["seconds"]["defects_after"] = since(t0);
   rep["path"] = res.path;
   res.cad_ready = after.check.cad_ready;
+  progress.finish();
   if (!res.cad_ready)
     res.problem = fmt::format("{} repair did not give a CAD-ready mesh: {}", res.path,
                               after.check.problems.empty() ? "unknown" : after.check.problems.front());

@@ -15,8 +15,6 @@ using namespace s2c;
 
 namespace {
 
-double angle_deg(const Eigen::Matrix3d& R) { return Eigen::AngleAxisd(R).angle() * 180.0 / M_PI; }
-
 // A small simulated scan of a fixture part (fast: 320×240, 8 views).
 fs::path small_scan(const fs::path& dir, const char* part) {
   SimulateOptions o;
@@ -183,6 +181,8 @@ TEST(Reconstruct, OrganizedMeshingAndMlsStayOnThePart) {
     for (std::size_t i = 0; i < soup.vertices.size(); i += 7) d.push_back(truth.closest(soup.vertices[i])->distance);
     std::sort(d.begin(), d.end());
     EXPECT_LT(d[d.size() / 2], 0.06) << (organized ? "organized" : "poisson+mls");
-    if (!organized) EXPECT_GT(rep.mls_radius_mm, 0);
+    if (!organized) {
+      EXPECT_GT(rep.mls_radius_mm, 0);
+    }
   }
 }
