@@ -22,6 +22,7 @@
 
 #include "fill/rbf.h"
 #include "s2c/core/check.h"
+#include "s2c/core/distance.h"
 #include "s2c/core/io.h"
 #include "s2c/repair/fill.h"
 
@@ -107,28 +108,6 @@ TriangleSoup param_surface(int nu, int nv, bool v_periodic, const std::function<
 
 // ----- distances -----------------------------------------------------------------------------
 
-// Closest point on triangle abc to p (Ericson, Real-Time Collision Detection 5.1.5).
-Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                    const Eigen::Vector3d& c) {
-  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return a;
-  const Eigen::Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;
-  const Eigen::Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
-  const double denom = 1.0 / (va + vb + vc);
-  return a + ab * (vb * denom) + ac * (vc * denom);
-}
-
 using Distance = std::function<double(const Eigen::Vector3d&)>;
 
 // Distance to the removed faces: the true surface of a real mesh inside its hole.
@@ -138,7 +117,7 @@ Distance removed_faces_distance(const TriangleSoup& full, const std::vector<int>
     tris.push_back({full.vertices[full.faces[f][0]], full.vertices[full.faces[f][1]], full.vertices[full.faces[f][2]]});
   return [tris](const Eigen::Vector3d& p) {
     double best = 1e300;
-    for (const auto& t : tris) best = std::min(best, (closest_on_triangle(p, t[0], t[1], t[2]) - p).norm());
+    for (const auto& t : tris) best = std::min(best, (closest_point_on_triangle(p, t[0], t[1], t[2]) - p).norm());
     return best;
   };
 }

@@ -9,25 +9,13 @@
 #include <nlohmann/json.hpp>
 
 #include "s2c/core/errors.h"
+#include "s2c/core/disjoint_sets.h"
 #include "s2c/core/predicates.h"
 
 namespace s2c {
 namespace {
 
-struct DisjointSets {
-  std::vector<int> parent;
-  explicit DisjointSets(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int find(int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(int a, int b) { parent[find(a)] = find(b); }
-};
-
-std::uint64_t edge_key(int a, int b) {
-  if (a > b) std::swap(a, b);
-  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
-}
+std::uint64_t edge_key(int a, int b) { return undirected_edge_key(a, b); }
 
 struct EdgeInfo {
   int faces = 0;

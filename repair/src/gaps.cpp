@@ -31,10 +31,7 @@ namespace {
 using Eigen::Vector3d;
 using Tri = std::array<int, 3>;
 
-std::uint64_t edge_key(int a, int b) {
-  if (a > b) std::swap(a, b);
-  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
-}
+std::uint64_t edge_key(int a, int b) { return undirected_edge_key(a, b); }
 
 struct Cell {
   long x, y, z;

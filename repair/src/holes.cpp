@@ -33,6 +33,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "s2c/core/disjoint_sets.h"
 #include "s2c/core/errors.h"
 
 namespace s2c::repair {
@@ -42,10 +43,7 @@ using Eigen::Vector2d;
 using Eigen::Vector3d;
 constexpr double kPi = 3.14159265358979323846;
 
-std::uint64_t edge_key(int a, int b) {
-  if (a > b) std::swap(a, b);
-  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
-}
+std::uint64_t edge_key(int a, int b) { return undirected_edge_key(a, b); }
 
 struct HalfEdge {
   int from = 0, to = 0;  ///< hole direction (reverse of the face's edge)
@@ -79,15 +77,7 @@ std::vector<HalfEdge> free_half_edges(const TriangleSoup& soup) {
   return out;
 }
 
-struct UnionFind {
-  std::vector<int> parent;
-  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int find(int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(int a, int b) { parent[find(a)] = find(b); }
-};
+using UnionFind = DisjointSets;
 
 /// Clockwise angle in (0, 2π] from direction `ref` to direction `d` about the normal `n`
 /// (both directions projected into the plane ⊥ n). Faces are counter-clockwise about n, so

@@ -2,6 +2,7 @@
 
 #include <numeric>
 
+#include "s2c/core/disjoint_sets.h"
 #include "s2c/core/predicates.h"
 
 namespace s2c::repair {
@@ -17,18 +18,13 @@ std::unordered_map<std::uint64_t, std::vector<int>> edge_faces(const TriangleSou
 }
 
 std::vector<int> face_components(const TriangleSoup& soup, int& count) {
-  std::vector<int> parent(soup.vertices.size());
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
+  DisjointSets sets(soup.vertices.size());
   for (const auto& f : soup.faces)
-    for (int k = 1; k < 3; ++k) parent[find(f[k])] = find(f[0]);
+    for (int k = 1; k < 3; ++k) sets.unite(f[k], f[0]);
   std::unordered_map<int, int> id;
   std::vector<int> comp(soup.faces.size());
   for (std::size_t fi = 0; fi < soup.faces.size(); ++fi) {
-    const int root = find(soup.faces[fi][0]);
+    const int root = sets.find(soup.faces[fi][0]);
     comp[fi] = id.emplace(root, static_cast<int>(id.size())).first->second;
   }
   count = static_cast<int>(id.size());

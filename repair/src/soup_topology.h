@@ -10,10 +10,7 @@
 
 namespace s2c::repair {
 
-inline std::uint64_t undirected_key(int a, int b) {
-  if (a > b) std::swap(a, b);
-  return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
-}
+inline std::uint64_t undirected_key(int a, int b) { return undirected_edge_key(a, b); }
 
 /// Faces of every undirected edge.
 std::unordered_map<std::uint64_t, std::vector<int>> edge_faces(const TriangleSoup& soup);

@@ -263,25 +263,18 @@ std::vector<Loop> repair_pairing(const TriangleSoup& soup, const MeshIndex& inde
     const auto& occ = at[v];
     // Fans at v: union-find over the faces of v joined through edges at v.
     const std::vector<int> faces = index.faces_of(v);
-    std::vector<int> parent(faces.size());
-    std::iota(parent.begin(), parent.end(), 0);
-    const auto find = [&](int x) {
-      while (parent[x] != x) x = parent[x] = parent[parent[x]];
-      return x;
-    };
-    std::unordered_map<int, int> by_other, local;
+    std::vector<std::array<int, 3>> corners;
+    std::unordered_map<int, int> local;
     for (int f = 0; f < static_cast<int>(faces.size()); ++f) {
       local[faces[f]] = f;
-      for (int c : soup.faces[faces[f]]) {
-        if (c == v) continue;
-        auto [it, inserted] = by_other.try_emplace(c, f);
-        if (!inserted) parent[find(f)] = find(it->second);
-      }
+      corners.push_back(soup.faces[faces[f]]);
     }
+    DisjointSets fan;
+    fill::fans_at(v, corners, fan);
     // Fan of each occurrence's incoming and outgoing rim edge (the mesh face holds it reversed).
     const auto fan_of_face = [&](int f) {
       const auto it = local.find(f);
-      return it == local.end() ? -1 : find(it->second);
+      return it == local.end() ? -1 : fan.find(it->second);
     };
     std::vector<int> fin(occ.size()), fout(occ.size());
     bool known = true;
@@ -292,16 +285,11 @@ std::vector<Loop> repair_pairing(const TriangleSoup& soup, const MeshIndex& inde
     }
     if (!known) continue;
     // Cycles of the fan pairing: a union-find over fans joined by each occurrence.
-    std::vector<int> cyc(faces.size());
-    std::iota(cyc.begin(), cyc.end(), 0);
-    const auto root = [&](int x) {
-      while (cyc[x] != x) x = cyc[x] = cyc[cyc[x]];
-      return x;
-    };
-    for (std::size_t k = 0; k < occ.size(); ++k) cyc[root(fin[k])] = root(fout[k]);
+    DisjointSets cyc(faces.size());
+    for (std::size_t k = 0; k < occ.size(); ++k) cyc.unite(fin[k], fout[k]);
     for (std::size_t a = 0; a < occ.size(); ++a)
       for (std::size_t b = a + 1; b < occ.size(); ++b) {
-        if (root(fin[a]) == root(fin[b])) continue;
+        if (cyc.find(fin[a]) == cyc.find(fin[b])) continue;
         const int oa = occ[a], ob = occ[b];
         std::swap(succ[oa], succ[ob]);
         // A split must not leave a loop of fewer than 3 edges (two edges between the same two
@@ -313,7 +301,7 @@ std::vector<Loop> repair_pairing(const TriangleSoup& soup, const MeshIndex& inde
         prev[succ[oa]] = oa;
         prev[succ[ob]] = ob;
         std::swap(fout[a], fout[b]);
-        cyc[root(fin[a])] = root(fin[b]);
+        cyc.unite(fin[a], fin[b]);
         changed = true;
       }
   }

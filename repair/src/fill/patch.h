@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 
+#include "s2c/core/disjoint_sets.h"
 #include "s2c/core/mesh.h"
 
 namespace s2c::repair::fill {
@@ -17,7 +18,11 @@ namespace s2c::repair::fill {
 inline std::uint64_t directed_key(int a, int b) {
   return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
 }
-inline std::uint64_t edge_key(int a, int b) { return a < b ? directed_key(a, b) : directed_key(b, a); }
+inline std::uint64_t edge_key(int a, int b) { return undirected_edge_key(a, b); }
+
+/// Groups `faces` (all containing vertex v) into fans: faces joined through an edge at v.
+/// `fans` is reset to one set per face; returns how many fans there are.
+int fans_at(int v, const std::vector<std::array<int, 3>>& faces, DisjointSets& fans);
 
 /// Adjacency of a soup, kept up to date as patches are appended (so later holes see earlier
 /// patches). Built once per fill_holes call: O(#F).

@@ -21,10 +21,24 @@ bool collinear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::
   return true;
 }
 
-int find(std::vector<int>& parent, int x) {
-  while (parent[x] != x) x = parent[x] = parent[parent[x]];
-  return x;
+
+}  // namespace
+
+int fans_at(int v, const std::vector<std::array<int, 3>>& faces, DisjointSets& fans) {
+  fans = DisjointSets(faces.size());
+  std::unordered_map<int, int> by_other;  // other corner of an edge at v → a face holding it
+  for (int f = 0; f < static_cast<int>(faces.size()); ++f)
+    for (int c : faces[f]) {
+      if (c == v) continue;
+      auto [it, inserted] = by_other.try_emplace(c, f);
+      if (!inserted) fans.unite(f, it->second);
+    }
+  int roots = 0;
+  for (int f = 0; f < static_cast<int>(faces.size()); ++f) roots += fans.find(f) == f;
+  return roots;
 }
+
+namespace {
 
 std::string check_topology(const TriangleSoup& soup, const MeshIndex& index, const Patch& p) {
   const int n = p.rim_size();
@@ -71,36 +85,22 @@ std::string check_topology(const TriangleSoup& soup, const MeshIndex& index, con
     const std::array<int, 3> g{p.global(t[0]), p.global(t[1]), p.global(t[2])};
     for (int c : g) fans[c].push_back(g);
   }
-  const auto components = [](int v, const std::vector<std::array<int, 3>>& faces, std::vector<int>& parent) {
-    parent.resize(faces.size());
-    std::iota(parent.begin(), parent.end(), 0);
-    std::unordered_map<int, int> by_other;  // other corner of an edge at v → a face holding it
-    for (int f = 0; f < static_cast<int>(faces.size()); ++f)
-      for (int c : faces[f]) {
-        if (c == v) continue;
-        auto [it, inserted] = by_other.try_emplace(c, f);
-        if (!inserted) parent[find(parent, f)] = find(parent, it->second);
-      }
-    int roots = 0;
-    for (int f = 0; f < static_cast<int>(faces.size()); ++f) roots += find(parent, f) == f;
-    return roots;
-  };
-  std::vector<int> parent;
+  DisjointSets parent;
   for (auto& [v, faces] : fans) {
     const std::size_t patch_faces = faces.size();
     std::vector<std::array<int, 3>> mesh;
     if (v < p.base)
       for (int f : index.faces_of(v)) mesh.push_back(soup.faces[f]);
     faces.insert(faces.end(), mesh.begin(), mesh.end());
-    const int after = components(v, faces, parent);
+    const int after = fans_at(v, faces, parent);
     if (after == 1) continue;
-    std::vector<int> mesh_parent;
-    const int before = mesh.empty() ? 0 : components(v, mesh, mesh_parent);
+    DisjointSets mesh_parent;
+    const int before = mesh.empty() ? 0 : fans_at(v, mesh, mesh_parent);
     bool attached = before > 1 && after <= before;
     if (attached) {
       std::unordered_set<int> with_mesh;
-      for (std::size_t f = patch_faces; f < faces.size(); ++f) with_mesh.insert(find(parent, static_cast<int>(f)));
-      for (std::size_t f = 0; f < patch_faces && attached; ++f) attached = with_mesh.count(find(parent, static_cast<int>(f))) > 0;
+      for (std::size_t f = patch_faces; f < faces.size(); ++f) with_mesh.insert(parent.find(static_cast<int>(f)));
+      for (std::size_t f = 0; f < patch_faces && attached; ++f) attached = with_mesh.count(parent.find(static_cast<int>(f))) > 0;
     }
     if (!attached) return "vertex " + std::to_string(v) + " would be non-manifold";
   }

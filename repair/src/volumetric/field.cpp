@@ -7,6 +7,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "s2c/core/disjoint_sets.h"
 #include "s2c/core/distance.h"
 #include "volumetric/winding.h"
 
@@ -59,10 +60,7 @@ struct Pseudonormals {
   std::vector<Eigen::Vector3d> face, vertex;
   std::unordered_map<std::uint64_t, Eigen::Vector3d> edge;
 
-  static std::uint64_t edge_key(int a, int b) {
-    if (a > b) std::swap(a, b);
-    return (std::uint64_t(a) << 32) | std::uint32_t(b);
-  }
+  static std::uint64_t edge_key(int a, int b) { return undirected_edge_key(a, b); }
 
   explicit Pseudonormals(const TriangleSoup& s) : face(s.faces.size()), vertex(s.vertices.size(), Eigen::Vector3d::Zero()) {
     for (std::size_t i = 0; i < s.faces.size(); ++i) {
@@ -181,19 +179,6 @@ void classify_by_dot(const TriangleSoup& soup, const SurfaceQuery& query, Sparse
   });
 }
 
-struct UnionFind {
-  std::vector<int> parent;
-  int find(int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(int a, int b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
-
 /// The generalised winding number decides inside/outside, but evaluating it at every band vertex
 /// costs ~100× the distance field. The sign cannot change between two neighbouring vertices
 /// unless the surface passes between them, so the band is cut into regions that no surface
@@ -244,9 +229,7 @@ void classify_by_winding(const TriangleSoup& soup, const SurfaceQuery& query, do
       }
     }
   });
-  UnionFind uf;
-  uf.parent.resize(nb * N);
-  for (std::size_t v = 0; v < uf.parent.size(); ++v) uf.parent[v] = static_cast<int>(v);
+  DisjointSets uf(nb * N);
   for (std::size_t bi = 0; bi < nb; ++bi)
     for (int i = 0; i < N; ++i)
       for (int a = 0; a < 3; ++a)

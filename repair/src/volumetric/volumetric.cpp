@@ -19,11 +19,7 @@ namespace {
 std::size_t open_edges(const TriangleSoup& s) {
   std::unordered_map<std::uint64_t, int> count;
   for (const auto& f : s.faces)
-    for (int k = 0; k < 3; ++k) {
-      int a = f[k], b = f[(k + 1) % 3];
-      if (a > b) std::swap(a, b);
-      ++count[(std::uint64_t(a) << 32) | std::uint32_t(b)];
-    }
+    for (int k = 0; k < 3; ++k) ++count[undirected_edge_key(f[k], f[(k + 1) % 3])];
   std::size_t open = 0;
   for (const auto& [e, n] : count) open += n == 1;
   return open;

@@ -4,6 +4,7 @@
 /// duplicate faces) for checking and repair.
 #include <array>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -49,6 +50,12 @@ struct Bounds {
 };
 Bounds bounds(const TriangleSoup& soup);
 Bounds bounds(const Mesh& mesh);
+
+/// Key of the undirected edge {a, b} (the smaller index in the high 32 bits).
+inline std::uint64_t undirected_edge_key(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
+}
 
 inline Eigen::Vector3d to_eigen(const OpenMesh::Vec3d& p) { return {p[0], p[1], p[2]}; }
 inline OpenMesh::Vec3d to_om(const Eigen::Vector3d& p) { return {p.x(), p.y(), p.z()}; }
