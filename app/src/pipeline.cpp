@@ -111,8 +111,10 @@ std::vector<Stage> plan(const RunOptions& o, InputKind kind, fs::path& final_mes
                             {d / "repaired.ply"}, {}}))
     mesh = d / "repaired.ply";
   fs::path features;
-  if (!mesh.empty() && add({"features", "scan2cad-features", {mesh.string(), "-o", (d / "features.json").string()},
-                            {mesh}, {d / "features.json"}, {}}))
+  if (!mesh.empty() && add({"features", "scan2cad-features",
+                            {mesh.string(), "-o", (d / "features.json").string(), "--segments-out",
+                             (d / "segments.ply").string()},
+                            {mesh}, {d / "features.json", d / "segments.ply"}, {}}))
     features = d / "features.json";
   if (!o.edit_script.empty() && !features.empty() &&
       add({"edit", "scan2cad-edit",

@@ -52,6 +52,23 @@ expect_rc 3 "repair --strategy surface --holes none on an open triangle" "$bin/s
   -o "$work/rep.ply" --strategy surface --holes none --report "$work/rep.json"
 [[ ! -e "$work/rep.ply" ]] || fail "repair wrote a mesh that is not CAD-ready"
 [[ -s "$work/rep.json" ]] || fail "repair wrote no report on failure"
+if [[ -x "$bin/scan2cad-features" ]]; then
+  expect_rc 2 "features on a bad mesh" "$bin/scan2cad" features "$work/bad.off" -o "$work/f.json"
+  grep -q "bad.off" "$work/stderr" || fail "features' message does not name the file"
+  [[ ! -e "$work/f.json" ]] || fail "features left output after bad input"
+  printf 'OFF\n3 1 0\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n' > "$work/nan.off"
+  expect_rc 2 "features on a mesh with NaN" "$bin/scan2cad" features "$work/nan.off" -o "$work/f.json"
+  [[ ! -e "$work/f.json" ]] || fail "features left output after a NaN mesh"
+  expect_rc 2 "features --segments-out not PLY" "$bin/scan2cad" features "$src/fixtures/parts/plate.stl" \
+    -o "$work/f.json" --segments-out "$work/seg.stl"
+  [[ ! -e "$work/f.json" ]] || fail "features wrote output after a bad option"
+  expect_rc 2 "features --min-angle out of range" "$bin/scan2cad" features "$src/fixtures/parts/plate.stl" \
+    -o "$work/f.json" --min-angle 500
+  # A lone open triangle has no features worth the name: an honest result, not an error.
+  expect_rc 0 "features on an open triangle" "$bin/scan2cad" features "$work/tri.off" -o "$work/f.json"
+  python3 -c 'import json,sys; f=json.load(open(sys.argv[1])); assert f["format"]=="scan2cad.features/1"' \
+    "$work/f.json" || fail "features on an open triangle wrote no valid features.json"
+fi
 expect_rc 2 "run on a missing input" "$bin/scan2cad" run "$work/nothing.stl" --out "$work/run_out"
 cmp -s "$work/bad.off" "$work/bad.copy" || fail "an input was modified"
 ls -a "$work" | grep -q "\.tmp-" && fail "a temporary file was left behind"

@@ -6,7 +6,8 @@ rm -rf "$work"; mkdir -p "$work"
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
 "$bin/scan2cad" run "$src/fixtures/scans/plate" --out "$work/out" --quiet || fail "run exited $?"
-for f in manifest.json cloud.ply mesh.ply repaired.ply check.json reports/reconstruct.json reports/repair.json; do
+for f in manifest.json cloud.ply mesh.ply repaired.ply features.json segments.ply check.json \
+         reports/reconstruct.json reports/repair.json reports/features.json; do
   [[ -s "$work/out/$f" ]] || fail "missing $f"
 done
 python3 - "$work/out" <<'PY'
@@ -16,6 +17,7 @@ m = json.load(open(os.path.join(out, "manifest.json")))
 st = {s["name"]: s for s in m["stages"]}
 assert st["reconstruct"]["status"] == "ok", st["reconstruct"]
 assert st["repair"]["status"] == "ok", st["repair"]
+assert st["features"]["status"] == "ok", st["features"]
 assert st["check"]["status"] == "ok", st["check"]
 for s in m["stages"]:
     if s["status"] == "ok":
@@ -41,6 +43,21 @@ print("repaired plate: chamfer %.4f mm, coverage %.3f, hausdorff %.3f mm" % (a["
 assert a["chamfer_mm"] <= 0.03, a["chamfer_mm"]
 assert a["coverage"] >= 0.97, a["coverage"]
 assert a["hausdorff_mm"] <= 1.0, a["hausdorff_mm"]
+PY
+# Features of the repaired scan against the plate's ground truth (primitives, lines, constraints).
+"$bin/s2c-bench-features" mesh "$work/out/repaired.ply" "$src/fixtures/parts/plate.truth.json" \
+  --features "$work/out/features.json" --json "$work/features_eval.json" > /dev/null || fail "features evaluation"
+python3 - "$work/out" "$work/features_eval.json" <<'PY'
+import json, sys, os
+f = json.load(open(os.path.join(sys.argv[1], "features.json")))
+assert f["format"] == "scan2cad.features/1", f["format"]
+assert f["mesh"]["faces"] > 10000, f["mesh"]
+e = json.load(open(sys.argv[2]))
+print("features of the repaired plate scan: primitive recall %.3f, line F1 %.3f, constraint recall %.3f"
+      % (e["primitive_recall"], e["line_f1"], e["constraint_recall"]))
+assert e["primitive_recall"] >= 0.9, e
+assert e["line_f1"] >= 0.9, e
+assert e["constraint_recall"] >= 0.9, e
 PY
 # Re-run: everything up to date.
 "$bin/scan2cad" run "$src/fixtures/scans/plate" --out "$work/out" --quiet

@@ -1,0 +1,57 @@
+#pragma once
+/// \file Feature analysis of a triangle mesh (paper §3, Kim/Choi/Lee 2009): tensor voting per
+/// vertex, feature lines, feature patches with fitted shapes, components and constraints.
+#include <filesystem>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "s2c/core/mesh.h"
+#include "s2c/features/constraints.h"
+#include "s2c/features/feature_set.h"
+
+namespace s2c::features {
+
+enum class VertexClass : unsigned char { face, crease, corner };
+
+struct FeatureOptions {
+  double min_crease_deg = 25.0;   ///< smallest crease angle (between face normals) to detect
+  double radius = 0.0;            ///< voting radius, mm (0: 2 median edge lengths, 3 on noisy meshes)
+  double noise = -1.0;            ///< noise σ of the surface, mm (< 0: measured from the mesh)
+  double fit_tolerance = 0.0;     ///< accept a shape when RMS ≤ this, mm (0: from noise and size)
+  bool constraints = true;
+  ConstraintOptions constraint;   ///< diagonal is filled from the mesh
+};
+
+/// Per-vertex result of tensor voting.
+struct VertexTensor {
+  Eigen::Vector3d lambda = Eigen::Vector3d::Zero();  ///< λ1 ≥ λ2 ≥ λ3 (normalised: λ1 = 1)
+  Eigen::Vector3d e1 = Eigen::Vector3d::Zero(), e3 = Eigen::Vector3d::Zero();  ///< normal, crease tangent
+  VertexClass cls = VertexClass::face;
+};
+
+struct Analysis {
+  FeatureSet features;
+  std::vector<VertexTensor> vertices;  ///< per mesh vertex
+  std::vector<int> face_patch;         ///< per face: index into features.patches
+  double noise = 0.0;                  ///< the noise σ used, mm
+  double radius = 0.0;                 ///< the voting radius used, mm
+  double fit_tolerance = 0.0;          ///< the acceptance RMS used, mm
+};
+
+/// Tensor voting only (exposed for tests): T = Σ μ_f n_f n_fᵀ over faces near each vertex.
+std::vector<VertexTensor> vote_tensors(const Mesh& mesh, double radius, double min_crease_deg, double noise);
+
+/// The whole analysis. The mesh must have face normals updated. \throw InvalidInput for an empty mesh.
+Analysis analyze(const Mesh& mesh, const FeatureOptions& options, nlohmann::json* report = nullptr);
+
+}  // namespace s2c::features
+
+namespace s2c::features {
+
+/// Writes the mesh as binary PLY with a per-face `segment` (patch index) and a colour per patch
+/// (planes in blues, cylinders greens, cones oranges, spheres purples, freeform grey), so the
+/// segmentation can be looked at in any viewer. Atomic. \throw IoError
+void write_segments_ply(const Mesh& mesh, const Analysis& analysis, const std::filesystem::path& path);
+
+}  // namespace s2c::features

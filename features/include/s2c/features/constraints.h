@@ -1,0 +1,30 @@
+#pragma once
+/// \file Constraint analysis (paper §3.3): every pair of fitted features is tested for the
+/// constraint kinds with tight CAD tolerances; redundant constraints are removed (equivalence
+/// kinds become one group per class; line constraints are preferred where they imply the
+/// patch constraint, as the paper says).
+#include <vector>
+
+#include "s2c/features/feature_set.h"
+
+namespace s2c::features {
+
+struct ConstraintOptions {
+  double angle_tol_deg = 2.0;     ///< parallel / perpendicular / fixed_angle / coaxial axis tolerance
+  double length_tol = 0.0;        ///< absolute length / position tolerance, mm (0: 0.5% of `diagonal`)
+  double diagonal = 1.0;          ///< bounding-box diagonal of the part, mm
+  double radius_rel_tol = 0.01;   ///< equal_radius / equal_length relative tolerance
+  double area_rel_tol = 0.05;     ///< symmetric: mirrored patches must have areas within this fraction
+  int max_mirror_planes = 64;     ///< symmetric: candidate mirror planes tested (largest supporting area first)
+  /// Patches smaller than this (mm²) and the lines touching them take no part: on scan meshes
+  /// they are the reconstruction's artefacts (a constriction inside a hole the scanner never
+  /// saw), whose chance alignments would be stated as constraints. 0: every patch takes part.
+  double min_patch_area = 0.0;
+};
+
+/// Detects constraints among `features` (their patches and lines with shapes; `adjacency`
+/// filled) and appends them to `features.groups` as kind "constraint" with ids continuing the
+/// existing G numbering. Returns how many were added.
+int detect_constraints(FeatureSet& features, const ConstraintOptions& options);
+
+}  // namespace s2c::features

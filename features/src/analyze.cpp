@@ -1,0 +1,226 @@
+// The feature analysis pipeline (paper §3): tensor voting → patches (flood fill, shape fitting,
+// merging) → lines (patch borders at creases, fitted) → components, adjacency → constraints.
+#include "s2c/features/analyze.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include "lines.h"
+#include "mesh_arrays.h"
+#include "s2c/core/disjoint_sets.h"
+#include "s2c/core/errors.h"
+#include "segment.h"
+#include "tensor_voting.h"
+
+namespace s2c::features {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+/// Relative noise below which a mesh counts as a clean tessellation: raw face normals are then
+/// trusted as they are (no filtering, plain flood fill).
+constexpr double kCleanNoise = 0.01;
+
+/// On noisy meshes, patches below this share of the surface area take no part in constraints.
+constexpr double kMinConstraintAreaShare = 0.002;
+
+/// Fit tolerance floor on noisy meshes, in median edge lengths (see analyze()).
+constexpr double kWavinessPerEdge = 0.1;
+
+/// Constraint detection compares features pairwise. A mesh that falls apart into more features
+/// than this (a broken or unrepaired scan) gets none, with a warning, rather than a run of hours:
+/// its constraints would mean nothing anyway.
+constexpr std::size_t kMaxConstraintFeatures = 20000;
+
+void add_components(const MeshArrays& m, const Segmentation& seg, FeatureSet& f) {
+  DisjointSets sets(m.faces());
+  for (const auto& E : m.edges)
+    if (E.f1 >= 0) sets.unite(E.f0, E.f1);
+  std::map<int, std::vector<std::string>> members;  // component root → feature ids
+  for (std::size_t p = 0; p < f.patches.size(); ++p)
+    members[sets.find(seg.regions[p].faces.front())].push_back(f.patches[p].id);
+  for (const auto& l : f.lines) {
+    const int v = l.vertices.front();
+    members[sets.find(m.vf[m.vf_start[v]])].push_back(l.id);
+  }
+  for (auto& [root, ids] : members) {
+    Group g;
+    g.id = fmt::format("G{}", f.groups.size());
+    g.kind = "component";
+    g.members = std::move(ids);
+    f.groups.push_back(std::move(g));
+  }
+}
+
+/// Patches sharing a vertex are adjacent (the paper: one shared vertex counts), lines are adjacent
+/// to the patches around their vertices and to lines they share a vertex with.
+void add_adjacency(const MeshArrays& m, const Segmentation& seg, FeatureSet& f) {
+  std::set<std::pair<std::string, std::string>> pairs;
+  auto add = [&](const std::string& a, const std::string& b) {
+    if (a != b) pairs.emplace(std::min(a, b), std::max(a, b));
+  };
+  std::vector<std::vector<int>> vertex_lines(m.vertices());
+  for (std::size_t l = 0; l < f.lines.size(); ++l)
+    for (int v : f.lines[l].vertices) vertex_lines[v].push_back(static_cast<int>(l));
+  std::vector<int> around;
+  for (int v = 0; v < m.vertices(); ++v) {
+    around.clear();
+    for (int k = m.vf_start[v]; k < m.vf_start[v + 1]; ++k) around.push_back(seg.face_region[m.vf[k]]);
+    std::sort(around.begin(), around.end());
+    around.erase(std::unique(around.begin(), around.end()), around.end());
+    for (std::size_t i = 0; i < around.size(); ++i) {
+      for (std::size_t j = i + 1; j < around.size(); ++j) add(f.patches[around[i]].id, f.patches[around[j]].id);
+      for (int l : vertex_lines[v]) add(f.patches[around[i]].id, f.lines[l].id);
+    }
+    for (std::size_t i = 0; i < vertex_lines[v].size(); ++i)
+      for (std::size_t j = i + 1; j < vertex_lines[v].size(); ++j)
+        add(f.lines[vertex_lines[v][i]].id, f.lines[vertex_lines[v][j]].id);
+  }
+  // Natural order: P before L, numbers ascending.
+  auto key = [](const std::string& id) { return std::make_pair(id[0] == 'L', std::stoi(id.substr(1))); };
+  f.adjacency.assign(pairs.begin(), pairs.end());
+  for (auto& [a, b] : f.adjacency)
+    if (key(b) < key(a)) std::swap(a, b);
+  std::sort(f.adjacency.begin(), f.adjacency.end(),
+            [&](const auto& x, const auto& y) { return std::make_pair(key(x.first), key(x.second)) < std::make_pair(key(y.first), key(y.second)); });
+}
+
+}  // namespace
+
+std::vector<VertexTensor> vote_tensors(const Mesh& mesh, double radius, double min_crease_deg, double noise) {
+  const MeshArrays m = build_arrays(mesh);
+  return vote(m, m.fnormal, radius, voting_thresholds(min_crease_deg, noise, m.median_edge));
+}
+
+Analysis analyze(const Mesh& mesh, const FeatureOptions& o, nlohmann::json* report) {
+  if (mesh.n_faces() == 0) throw InvalidInput("the mesh has no faces: nothing to analyse");
+  Analysis out;
+  nlohmann::json timings = nlohmann::json::object();
+  auto t = Clock::now();
+  const MeshArrays m = build_arrays(mesh);
+  timings["arrays"] = seconds_since(t);
+  const double diag = std::max(m.box.diagonal(), 1e-9);
+  const double edge = m.median_edge > 0 ? m.median_edge : diag * 1e-3;
+
+  t = Clock::now();
+  out.noise = o.noise >= 0 ? o.noise : measure_noise(m);
+  const bool noisy = out.noise > kCleanNoise * edge;
+  // Noise needs a wider vote and smoothed normals; a clean tessellation keeps its exact normals.
+  out.radius = o.radius > 0 ? o.radius : (noisy ? 3.0 : 2.0) * edge;
+  std::vector<Eigen::Vector3d> normals =
+      noisy ? filter_normals(m, 8, 0.35) : m.fnormal;
+  timings["normals"] = seconds_since(t);
+
+  t = Clock::now();
+  out.vertices = vote(m, normals, out.radius, voting_thresholds(o.min_crease_deg, noisy ? out.noise : 0.0, edge));
+  timings["tensor_voting"] = seconds_since(t);
+
+  t = Clock::now();
+  SegmentParams sp;
+  sp.min_crease_deg = o.min_crease_deg;
+  sp.noisy = noisy;
+  sp.diagonal = diag;
+  // A reconstructed surface (Poisson) is smooth between its vertices, so the edge-local noise
+  // misses its error, which is waviness at the scale of the mesh resolution: a tenth of an edge
+  // bounds it on noisy meshes (fixture scans: plane RMS 0.015-0.02 mm at 0.26 mm edges).
+  const double floor = std::max(2e-4 * diag, noisy ? kWavinessPerEdge * edge : 0.0);
+  out.fit_tolerance = o.fit_tolerance > 0 ? o.fit_tolerance : std::max(3.0 * out.noise, floor);
+  sp.tolerance = out.fit_tolerance;
+  sp.normal_tol_deg = noisy ? 20.0 : 10.0;
+  const Segmentation seg = segment(m, normals, out.vertices, sp);
+  timings["patches"] = seconds_since(t);
+
+  t = Clock::now();
+  const std::vector<TracedLine> traced = trace_lines(m, normals, seg, o.min_crease_deg, out.fit_tolerance, noisy);
+  timings["lines"] = seconds_since(t);
+
+  FeatureSet& f = out.features;
+  f.mesh_vertices = m.vertices();
+  f.mesh_faces = m.faces();
+  out.face_patch = seg.face_region;
+  for (std::size_t r = 0; r < seg.regions.size(); ++r) {
+    const Region& region = seg.regions[r];
+    Patch p;
+    p.id = fmt::format("P{}", r);
+    p.faces = region.faces;
+    p.area = region.area;
+    p.rms = region.fit.rms;
+    p.shape = region.fit.shape;
+    f.patches.push_back(std::move(p));
+  }
+  for (std::size_t l = 0; l < traced.size(); ++l) {
+    Line line;
+    line.id = fmt::format("L{}", l);
+    line.vertices = traced[l].vertices;
+    line.closed = traced[l].closed;
+    line.rms = traced[l].fit.rms;
+    line.shape = traced[l].fit.shape;
+    f.lines.push_back(std::move(line));
+  }
+  t = Clock::now();
+  add_adjacency(m, seg, f);
+  add_components(m, seg, f);
+  int constraints = 0;
+  const std::size_t feature_count = f.patches.size() + f.lines.size();
+  const bool too_many = feature_count > kMaxConstraintFeatures;
+  if (o.constraints && too_many)
+    spdlog::warn("{} patches and lines: more than {}, so no constraints are detected; the mesh is "
+                 "probably broken or very noisy: run scan2cad repair first, or raise --min-angle",
+                 feature_count, kMaxConstraintFeatures);
+  if (o.constraints && !too_many) {
+    ConstraintOptions co = o.constraint;
+    co.diagonal = diag;
+    if (noisy && co.min_patch_area <= 0) {
+      double total = 0;
+      for (const auto& p : f.patches) total += p.area;
+      co.min_patch_area = kMinConstraintAreaShare * total;
+    }
+    constraints = detect_constraints(f, co);
+  }
+  timings["groups"] = seconds_since(t);
+
+  if (report) {
+    std::map<std::string, int> patch_types, line_types, kinds;
+    for (const auto& p : f.patches) ++patch_types[shape_name(p.shape.type)];
+    for (const auto& l : f.lines) ++line_types[shape_name(l.shape.type)];
+    for (const auto& g : f.groups)
+      if (g.constraint) ++kinds[constraint_name(*g.constraint)];
+    std::size_t classes[3] = {0, 0, 0};
+    for (const auto& v : out.vertices) ++classes[static_cast<int>(v.cls)];
+    (*report)["mode"] = noisy ? "noisy" : "clean";
+    (*report)["noise_mm"] = out.noise;
+    (*report)["median_edge_mm"] = edge;
+    (*report)["voting_radius_mm"] = out.radius;
+    (*report)["fit_tolerance_mm"] = out.fit_tolerance;
+    (*report)["vertices"] = {{"face", classes[0]}, {"crease", classes[1]}, {"corner", classes[2]}};
+    (*report)["patches"] = f.patches.size();
+    (*report)["patch_types"] = patch_types;
+    (*report)["lines"] = f.lines.size();
+    (*report)["line_types"] = line_types;
+    (*report)["constraints"] = constraints;
+    if (o.constraints && too_many) (*report)["constraints_skipped"] = "too many features";
+    (*report)["constraint_kinds"] = kinds;
+    (*report)["seed_regions"] = seg.seeds;
+    (*report)["merged_patches"] = seg.merges;
+    (*report)["split_patches"] = seg.splits;
+    (*report)["grown_faces"] = seg.grown_faces;
+    (*report)["absorbed_patches"] = seg.absorbed;
+    (*report)["timings_s"] = timings;
+  }
+  spdlog::info("{} patches ({} freeform), {} lines, {} constraints; noise {:.3g} mm ({})", f.patches.size(),
+               std::count_if(f.patches.begin(), f.patches.end(),
+                             [](const Patch& p) { return p.shape.type == ShapeType::freeform; }),
+               f.lines.size(), constraints, out.noise, noisy ? "noisy: normals filtered" : "clean tessellation");
+  return out;
+}
+
+}  // namespace s2c::features

@@ -1,0 +1,352 @@
+// Surface fits: plane (weighted PCA), sphere, cylinder and cone (algebraic / normal-based initial
+// estimates, then Levenberg–Marquardt on the geometric distance in normalised coordinates).
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "fit_util.h"
+
+namespace s2c::features {
+namespace {
+
+using fit::Normalized;
+using Eigen::Vector3d;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+/// Candidate initial estimates are refined on at most this many samples; the best one then on all
+/// of the (≤ kMaxRefineSamples) refinement samples.
+constexpr int kCoarseSamples = 1000;
+
+/// Every k-th sample of `s`, at most `max` of them (s is already a stratified subsample).
+Normalized thin(const Normalized& s, int max) {
+  if (s.size() <= max) return s;
+  Normalized out;
+  out.center = s.center;
+  out.scale = s.scale;
+  const double step = static_cast<double>(s.size()) / max;
+  for (int k = 0; k < max; ++k) {
+    const int i = static_cast<int>(k * step);
+    out.p.push_back(s.p[i]);
+    out.n.push_back(s.n[i]);
+    out.w.push_back(s.w[i]);
+    out.sw.push_back(s.sw[i]);
+    out.normal_count += s.n[i].squaredNorm() > 0;
+  }
+  return out;
+}
+
+/// Unit axis tilted from `a` by (d0, d1) in its perpendicular frame `uv`.
+Vector3d tilt(const Vector3d& a, const Eigen::Matrix<double, 3, 2>& uv, double d0, double d1) {
+  return (a + d0 * uv.col(0) + d1 * uv.col(1)).normalized();
+}
+
+// ---- models for fit::levenberg_marquardt ----
+
+struct SphereModel {
+  static constexpr int kParams = 4;
+  using Vec = Eigen::Matrix<double, kParams, 1>;
+  const Normalized* s;
+  Vector3d c;
+  double r;
+
+  int residual_count() const { return s->size(); }
+  void residuals(const Vec& d, Eigen::VectorXd& out) const {
+    const Vector3d c2 = c + d.head<3>();
+    const double r2 = r + d[3];
+    for (int i = 0; i < s->size(); ++i) out[i] = s->sw[i] * ((s->p[i] - c2).norm() - r2);
+  }
+  void update(const Vec& d) {
+    c += d.head<3>();
+    r += d[3];
+  }
+};
+
+/// Cylinder (theta fixed at 0) or cone around the axis through p along a: in the half plane of a
+/// sample, (h, rho) = (along the axis from p, away from it), the surface is the line through
+/// (0, r) at angle theta from the axis; the residual is the signed distance to that line. Unlike
+/// an apex parameterisation this stays regular as the cone tends to a cylinder. Parameters: axis
+/// tilt (2), shift of p perpendicular to the axis (2; a shift along the axis changes nothing), r,
+/// and for a cone theta.
+template <int K>
+struct AxisModel {
+  static constexpr int kParams = K;
+  using Vec = Eigen::Matrix<double, K, 1>;
+  const Normalized* s;
+  Vector3d a, p;
+  double r, theta;
+  Eigen::Matrix<double, 3, 2> uv;
+
+  AxisModel(const Normalized& samples, const Vector3d& axis, const Vector3d& point, double radius, double angle)
+      : s(&samples), a(axis.normalized()), p(point), r(radius), theta(angle), uv(fit::perpendicular_frame(a)) {}
+
+  void moved(const Vec& d, Vector3d& a2, Vector3d& p2, double& r2, double& t2) const {
+    a2 = tilt(a, uv, d[0], d[1]);
+    p2 = p + uv * d.template segment<2>(2);
+    r2 = r + d[4];
+    t2 = K > 5 ? theta + d[K - 1] : theta;
+  }
+  int residual_count() const { return s->size(); }
+  void residuals(const Vec& d, Eigen::VectorXd& out) const {
+    Vector3d a2, p2;
+    double r2, t2;
+    moved(d, a2, p2, r2, t2);
+    const double ct = std::cos(t2), st = std::sin(t2);
+    for (int i = 0; i < s->size(); ++i) {
+      const Vector3d v = s->p[i] - p2;
+      const double h = a2.dot(v);
+      const double rho = (v - h * a2).norm();
+      out[i] = s->sw[i] * ((rho - r2) * ct - h * st);
+    }
+  }
+  void update(const Vec& d) {
+    moved(d, a, p, r, theta);
+    uv = fit::perpendicular_frame(a);
+  }
+};
+using CylinderModel = AxisModel<5>;
+using ConeModel = AxisModel<6>;
+
+/// An axis-model start: axis, point on it, radius there, half angle (0 for a cylinder).
+struct AxisStart {
+  Vector3d a, p;
+  double r, theta;
+};
+
+/// Smallest-eigenvalue eigenvector of Σ w n nᵀ (or of the normals' covariance when `centred`)
+/// over the samples with normals: the direction all normals are perpendicular to (cylinder), or
+/// make a constant angle with (cone).
+bool normal_axis(const Normalized& s, bool centred, Vector3d& axis) {
+  if (s.normal_count < 3) return false;
+  Vector3d mean = Vector3d::Zero();
+  double wsum = 0;
+  for (int i = 0; i < s.size(); ++i)
+    if (s.n[i].squaredNorm() > 0) {
+      mean += s.w[i] * s.n[i];
+      wsum += s.w[i];
+    }
+  if (!(wsum > 0)) return false;
+  mean = centred ? Vector3d(mean / wsum) : Vector3d::Zero();
+  Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
+  for (int i = 0; i < s.size(); ++i)
+    if (s.n[i].squaredNorm() > 0) M += s.w[i] * (s.n[i] - mean) * (s.n[i] - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(M / wsum);
+  if (!(es.eigenvalues()[2] > 1e-12)) return false;  // all normals equal: no axis
+  axis = es.eigenvectors().col(0);
+  return axis.allFinite();
+}
+
+/// The axis candidates: from the normals when known (the fit this is for says how), and the three
+/// principal axes of the points (long cylinders: the largest; short ones and symmetric sectors:
+/// one of the others), which also serve when there are no normals.
+std::vector<Vector3d> candidate_axes(const Normalized& s, bool centred_normals) {
+  std::vector<Vector3d> axes;
+  Vector3d a;
+  if (normal_axis(s, centred_normals, a)) axes.push_back(a);
+  const fit::Pca pc = fit::pca(s.p, s.w);
+  for (int k = 0; k < 3; ++k) axes.push_back(pc.vectors.col(k));
+  return axes;
+}
+
+/// Cylinder start for an axis: a circle fitted to the points projected on the plane ⟂ a.
+bool circle_start(const Normalized& s, const Vector3d& a, AxisStart& out) {
+  const auto uv = fit::perpendicular_frame(a);
+  std::vector<Eigen::Vector2d> q(s.size());
+  for (int i = 0; i < s.size(); ++i) q[i] = uv.transpose() * s.p[i];
+  Eigen::Vector2d c;
+  double r;
+  if (!fit::kasa_circle(q, s.w, c, r)) return false;
+  out = {a, uv * c, r, 0.0};
+  return true;
+}
+
+/// Cone start for an axis, algebraic: |q - c| = r0 + k h (q ⟂ a, h along a) squared is linear in
+/// (c, |c|² - r0², r0 k, k²). Needs samples at three or more heights.
+bool algebraic_cone_start(const Normalized& s, const Vector3d& a, AxisStart& out) {
+  const auto uv = fit::perpendicular_frame(a);
+  const int n = s.size();
+  if (n < 5) return false;
+  Eigen::MatrixXd A(n, 5);
+  Eigen::VectorXd b(n);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector2d q = uv.transpose() * s.p[i];
+    const double h = a.dot(s.p[i]), w = s.sw[i];
+    A.row(i) << w * q.x(), w * q.y(), w, w * h, w * h * h;
+    b[i] = -w * q.squaredNorm();
+  }
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  qr.setThreshold(1e-9);
+  if (qr.rank() < 5) return false;
+  const Eigen::Matrix<double, 5, 1> x = qr.solve(b);
+  const double k2 = -x[4];
+  if (!x.allFinite() || !(k2 > 1e-12)) return false;  // not a cone (a cylinder start covers that)
+  const double r0 = std::abs(x[3]) / (2.0 * std::sqrt(k2));
+  const double k = -x[3] / (2.0 * r0);
+  const Eigen::Vector2d c = -0.5 * x.head<2>();
+  if (!(r0 > 0) || !std::isfinite(k)) return false;
+  out = {a, uv * c, r0, std::atan(k)};
+  return true;
+}
+
+/// Cone start from the normals (the spec's construction): the axis from the normals' covariance,
+/// the apex as the least-squares intersection of the tangent planes n·(x − p) = 0, the half angle
+/// from the mean |n·a|; the axis oriented from the apex towards the samples.
+bool tangent_plane_cone_start(const Normalized& s, AxisStart& out) {
+  Vector3d a;
+  if (s.normal_count < 6 || !normal_axis(s, true, a)) return false;
+  Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
+  Vector3d rhs = Vector3d::Zero();
+  double sin_sum = 0, wsum = 0;
+  for (int i = 0; i < s.size(); ++i) {
+    const Vector3d& n = s.n[i];
+    if (n.squaredNorm() == 0) continue;
+    const Eigen::Matrix3d nn = s.w[i] * n * n.transpose();
+    M += nn;
+    rhs += nn * s.p[i];
+    sin_sum += s.w[i] * std::abs(n.dot(a));
+    wsum += s.w[i];
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(M);
+  // Nearly a cylinder: the tangent planes meet far away or nowhere; the other starts cover it.
+  if (!(es.eigenvalues()[0] > 1e-6 * es.eigenvalues()[2])) return false;
+  const Vector3d apex = es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() *
+                        es.eigenvectors().transpose() * rhs;
+  const double theta = std::asin(std::min(1.0, sin_sum / wsum));
+  double side = 0;
+  for (int i = 0; i < s.size(); ++i) side += s.w[i] * a.dot(s.p[i] - apex);
+  if (side < 0) a = -a;
+  const double height = -a.dot(apex);  // the centroid (origin) above the apex
+  const Vector3d p = apex + height * a;
+  if (!apex.allFinite() || !(height > 0)) return false;
+  out = {a, p, height * std::tan(theta), theta};
+  return true;
+}
+
+/// Refines every start on a coarse subsample, then the best one on all refinement samples.
+template <class Model>
+bool refine_best(const Normalized& s, const std::vector<AxisStart>& starts, AxisStart& best) {
+  const Normalized coarse = thin(s, kCoarseSamples);
+  double best_cost = kInf;
+  for (const AxisStart& st : starts) {
+    Model m(coarse, st.a, st.p, st.r, st.theta);
+    const double cost = fit::levenberg_marquardt(m);
+    if (!(cost < best_cost) || !m.a.allFinite() || !m.p.allFinite() || !std::isfinite(m.r) ||
+        !std::isfinite(m.theta))
+      continue;
+    best_cost = cost;
+    best = {m.a, m.p, m.r, m.theta};
+  }
+  if (!(best_cost < kInf)) return false;
+  Model m(s, best.a, best.p, best.r, best.theta);
+  if (!std::isfinite(fit::levenberg_marquardt(m))) return false;
+  best = {m.a, m.p, m.r, m.theta};
+  return best.a.allFinite() && best.p.allFinite() && std::isfinite(best.r) && std::isfinite(best.theta);
+}
+
+}  // namespace
+
+Fit fit_plane(const Samples& s) {
+  Fit out;
+  out.shape.type = ShapeType::plane;
+  Normalized ns;
+  if (!fit::normalize(s, 3, ns)) return out;
+  // Weighted PCA over all samples is already the exact least-squares plane (orthogonal
+  // distance), so there is nothing left for a nonlinear refinement to do.
+  const fit::Pca pc = fit::pca(s.points, s.weights);
+  if (!(pc.values[1] > 1e-10 * pc.values[2])) return out;  // collinear
+  Vector3d n = pc.vectors.col(0);
+  if (!s.normals.empty()) {
+    double agree = 0;
+    for (std::size_t i = 0; i < s.points.size(); ++i)
+      agree += (s.weights.empty() ? 1.0 : s.weights[i]) * n.dot(s.normals[i]);
+    if (agree < 0) n = -n;
+  }
+  out.shape.point = pc.mean;
+  out.shape.dir = n;
+  fit::finish(out, s);
+  return out;
+}
+
+Fit fit_sphere(const Samples& s) {
+  Fit out;
+  out.shape.type = ShapeType::sphere;
+  Normalized ns;
+  if (!fit::normalize(s, 4, ns)) return out;
+  // Algebraic: |x|² + D·x + E = 0 is linear in (D, E); coplanar points leave it undetermined.
+  const int n = ns.size();
+  Eigen::MatrixXd A(n, 4);
+  Eigen::VectorXd b(n);
+  for (int i = 0; i < n; ++i) {
+    const double w = ns.sw[i];
+    A.row(i) << w * ns.p[i].transpose(), w;
+    b[i] = -w * ns.p[i].squaredNorm();
+  }
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  qr.setThreshold(1e-9);
+  if (qr.rank() < 4) return out;
+  const Eigen::Vector4d x = qr.solve(b);
+  const Vector3d c = -0.5 * x.head<3>();
+  const double r2 = c.squaredNorm() - x[3];
+  if (!x.allFinite() || !(r2 > 0)) return out;
+  SphereModel m{&ns, c, std::sqrt(r2)};
+  if (!std::isfinite(fit::levenberg_marquardt(m)) || !(m.r > 0)) return out;
+  out.shape.point = ns.to_world(m.c);
+  out.shape.radius = m.r * ns.scale;
+  fit::finish(out, s);
+  return out;
+}
+
+Fit fit_cylinder(const Samples& s) {
+  Fit out;
+  out.shape.type = ShapeType::cylinder;
+  Normalized ns;
+  if (!fit::normalize(s, 5, ns)) return out;
+  std::vector<AxisStart> starts;
+  for (const Vector3d& a : candidate_axes(ns, false)) {
+    AxisStart st;
+    if (circle_start(ns, a, st)) starts.push_back(st);
+  }
+  AxisStart best;
+  if (starts.empty() || !refine_best<CylinderModel>(ns, starts, best) || !(best.r > 0)) return out;
+  const Vector3d foot = best.p - best.a * best.a.dot(best.p);  // nearest the centroid
+  out.shape.point = ns.to_world(foot);
+  out.shape.dir = best.a.normalized();
+  out.shape.radius = best.r * ns.scale;
+  fit::finish(out, s);
+  return out;
+}
+
+Fit fit_cone(const Samples& s) {
+  Fit out;
+  out.shape.type = ShapeType::cone;
+  Normalized ns;
+  if (!fit::normalize(s, 6, ns)) return out;
+  std::vector<AxisStart> starts;
+  AxisStart st;
+  if (tangent_plane_cone_start(ns, st)) starts.push_back(st);
+  for (const Vector3d& a : candidate_axes(ns, true)) {
+    if (algebraic_cone_start(ns, a, st)) starts.push_back(st);
+    if (circle_start(ns, a, st)) starts.push_back(st);
+  }
+  AxisStart best;
+  if (starts.empty() || !refine_best<ConeModel>(ns, starts, best)) return out;
+  // Half angle into [0, π/2): the line at theta ± π is the same line, at −theta it is the same
+  // line seen along −a.
+  Vector3d a = best.a.normalized();
+  double theta = best.theta - M_PI * std::round(best.theta / M_PI);
+  if (theta < 0) {
+    theta = -theta;
+    a = -a;
+  }
+  const double t = std::tan(theta);
+  if (!(t > 1e-9) || !std::isfinite(t)) return out;  // a cylinder: no apex
+  const Vector3d apex = best.p - (best.r / t) * a;
+  // The nappe holding the samples: a points from the apex into the opening.
+  double side = 0;
+  for (int i = 0; i < ns.size(); ++i) side += ns.w[i] * a.dot(ns.p[i] - apex);
+  out.shape.point = ns.to_world(apex);
+  out.shape.dir = side < 0 ? Vector3d(-a) : a;
+  out.shape.half_angle_deg = theta * 180.0 / M_PI;
+  fit::finish(out, s);
+  return out;
+}
+
+}  // namespace s2c::features

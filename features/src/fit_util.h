@@ -1,0 +1,125 @@
+#pragma once
+// Private helpers of the shape fits (fit_surface.cpp, fit_curve.cpp): sample checks, normalised
+// and subsampled copies of the samples, weighted PCA, the algebraic circle fit and a small
+// Levenberg–Marquardt solver for models with a handful of parameters.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "s2c/features/shape.h"
+
+namespace s2c::features::fit {
+
+/// At most this many samples enter the nonlinear refinement (metrics use all of them).
+constexpr int kMaxRefineSamples = 5000;
+constexpr int kMaxIterations = 50;
+
+/// The samples the refinement runs on, in normalised coordinates: centred on the weighted
+/// centroid and scaled to unit RMS radius, so every parameter is O(1) and the tolerances of the
+/// solver are scale free. Subsampled (stratified, deterministic) to kMaxRefineSamples.
+struct Normalized {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  double scale = 1.0;                  ///< mm per normalised unit
+  std::vector<Eigen::Vector3d> p;      ///< normalised positions
+  std::vector<Eigen::Vector3d> n;      ///< unit normals, zero where unknown
+  std::vector<double> w;               ///< weights, mean 1
+  std::vector<double> sw;              ///< sqrt(w): residual factors
+  int normal_count = 0;                ///< samples with a known normal
+
+  Eigen::Vector3d to_world(const Eigen::Vector3d& q) const { return center + scale * q; }
+  int size() const { return static_cast<int>(p.size()); }
+};
+
+/// Checks `s` and builds its normalised subsample. False when the samples cannot determine a shape
+/// with `min_count` parameters: NaN/inf anywhere, negative weights, fewer than `min_count`
+/// samples of positive weight, or all points (numerically) equal.
+/// \throw InvalidInput if normals or weights are neither empty nor as many as the points.
+bool normalize(const Samples& s, int min_count, Normalized& out, int max_samples = kMaxRefineSamples);
+
+/// Weighted principal axes of points: eigenvalues ascending, eigenvectors in the columns.
+struct Pca {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  Eigen::Vector3d values = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d vectors = Eigen::Matrix3d::Identity();
+};
+/// `w` may be empty (all 1).
+Pca pca(const std::vector<Eigen::Vector3d>& p, const std::vector<double>& w);
+
+/// Orthonormal u, v (columns) perpendicular to the unit vector a.
+Eigen::Matrix<double, 3, 2> perpendicular_frame(const Eigen::Vector3d& a);
+
+/// Weighted algebraic (Kåsa) circle fit of 2D points: minimises Σ w (|q|² + D·q + F)².
+/// False when the points are collinear or too few.
+bool kasa_circle(const std::vector<Eigen::Vector2d>& q, const std::vector<double>& w, Eigen::Vector2d& center,
+                 double& radius);
+
+/// Fills rms, max_error, normal_rms_deg over all samples of `s` (weighted) and sets ok when the
+/// shape and the metrics are finite. Normal angles are unsigned (a hole's inward normals agree).
+void finish(Fit& f, const Samples& s);
+
+/// True when every number of the shape is finite.
+bool finite(const Shape& s);
+
+/// Minimises Σ r_i² with Levenberg–Marquardt (forward-difference Jacobian). The model holds its
+/// current parameters and is re-based after each accepted step, so a parameterisation local to
+/// the current estimate (axis tilts in its perpendicular frame) stays non-degenerate. Model:
+///   static constexpr int kParams;
+///   int residual_count() const;
+///   void residuals(const Eigen::Matrix<double, kParams, 1>& delta, Eigen::VectorXd& r) const;
+///   void update(const Eigen::Matrix<double, kParams, 1>& delta);  // residuals(0) afterwards == residuals(delta) before
+/// Returns the final cost Σ r_i² (inf/NaN when the model is not evaluable).
+template <class Model>
+double levenberg_marquardt(Model& model, int max_iterations = kMaxIterations) {
+  constexpr int k = Model::kParams;
+  using Vec = Eigen::Matrix<double, k, 1>;
+  using Mat = Eigen::Matrix<double, k, k>;
+  const int m = model.residual_count();
+  Eigen::VectorXd r(m), r_try(m);
+  Eigen::Matrix<double, Eigen::Dynamic, k> J(m, k);
+  model.residuals(Vec::Zero(), r);
+  double cost = r.squaredNorm();
+  if (!std::isfinite(cost)) return cost;
+  // Parameters are O(1) in normalised coordinates: an absolute step suits all of them.
+  constexpr double h = 1e-7;
+  double lambda = 1e-3;
+  for (int it = 0; it < max_iterations && cost > 1e-28; ++it) {
+    for (int j = 0; j < k; ++j) {
+      Vec d = Vec::Zero();
+      d[j] = h;
+      model.residuals(d, r_try);
+      J.col(j) = (r_try - r) / h;
+    }
+    const Mat A = J.transpose() * J;
+    const Vec g = J.transpose() * r;
+    const double floor = 1e-12 * std::max(A.trace() / k, 1e-300);
+    bool accepted = false, converged = false;
+    while (lambda < 1e12) {
+      Mat B = A;
+      for (int j = 0; j < k; ++j) B(j, j) += lambda * std::max(A(j, j), floor);
+      const Vec step = -B.ldlt().solve(g);
+      if (!step.allFinite()) {
+        lambda *= 10;
+        continue;
+      }
+      model.residuals(step, r_try);
+      const double c = r_try.squaredNorm();
+      if (std::isfinite(c) && c < cost) {
+        model.update(step);
+        r.swap(r_try);
+        converged = (cost - c) < 1e-12 * cost || step.norm() < 1e-12;
+        cost = c;
+        lambda = std::max(lambda / 3.0, 1e-12);
+        accepted = true;
+        break;
+      }
+      lambda *= 4;
+    }
+    if (!accepted || converged) break;
+  }
+  return cost;
+}
+
+}  // namespace s2c::features::fit

@@ -1,0 +1,205 @@
+#include "lines.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace s2c::features {
+namespace {
+
+Eigen::Vector3d oriented_normal(const Region& r, const Eigen::Vector3d& p, const Eigen::Vector3d& face_normal) {
+  if (r.fit.shape.type == ShapeType::freeform) return face_normal;
+  Eigen::Vector3d n = surface_normal(r.fit.shape, p);
+  if (n.squaredNorm() == 0) return face_normal;
+  return n.dot(face_normal) < 0 ? Eigen::Vector3d(-n) : n;
+}
+
+double rms_distance(const Shape& s, const std::vector<Eigen::Vector3d>& pts, double* max_error) {
+  double sum = 0, worst = 0;
+  for (const auto& p : pts) {
+    const double d = distance(s, p);
+    sum += d * d;
+    worst = std::max(worst, d);
+  }
+  if (max_error) *max_error = worst;
+  return pts.empty() ? 0.0 : std::sqrt(sum / pts.size());
+}
+
+/// Straight line between the first and last point's projections onto the line (point, dir).
+Shape clipped_line(const Eigen::Vector3d& point, const Eigen::Vector3d& dir, const std::vector<Eigen::Vector3d>& pts) {
+  const Eigen::Vector3d a = point + dir * dir.dot(pts.front() - point);
+  const Eigen::Vector3d b = point + dir * dir.dot(pts.back() - point);
+  Shape s;
+  s.type = ShapeType::line;
+  s.point = a;
+  s.length = (b - a).norm();
+  s.dir = s.length > 0 ? Eigen::Vector3d((b - a) / s.length) : dir;
+  return s;
+}
+
+/// A circle (closed chain) or arc (open chain) with the given centre, normal and radius, swept
+/// through the ordered points.
+Shape circle_through(const Eigen::Vector3d& center, const Eigen::Vector3d& normal, double radius,
+                     const std::vector<Eigen::Vector3d>& pts, bool closed) {
+  Shape s;
+  s.point = center;
+  s.dir = normal.normalized();
+  s.radius = radius;
+  auto project = [&](const Eigen::Vector3d& p) {
+    Eigen::Vector3d d = p - center;
+    d -= s.dir * s.dir.dot(d);
+    const double len = d.norm();
+    return len > 0 ? Eigen::Vector3d(center + radius * d / len) : center;
+  };
+  double swept = 0;
+  for (std::size_t i = 1; i < pts.size(); ++i) {
+    const Eigen::Vector3d a = pts[i - 1] - center, b = pts[i] - center;
+    swept += std::atan2(s.dir.dot(a.cross(b)), a.dot(b));
+  }
+  const double angle = std::abs(swept) * 180.0 / M_PI;
+  if (closed || angle >= 350.0) {
+    s.type = ShapeType::circle;
+    return s;
+  }
+  s.type = ShapeType::arc;
+  s.start = project(pts.front());
+  s.end = project(pts.back());
+  s.angle_deg = angle;
+  return s;
+}
+
+/// The intersection curve of the two patches' shapes, when it is a line or a circle.
+bool intersection_curve(const Shape& a, const Shape& b, const std::vector<Eigen::Vector3d>& pts, bool closed,
+                        Shape& out) {
+  const Shape* plane = a.type == ShapeType::plane ? &a : b.type == ShapeType::plane ? &b : nullptr;
+  const Shape* other = plane == &a ? &b : &a;
+  if (!plane) return false;
+  const Eigen::Vector3d& n = plane->dir;
+  if (other->type == ShapeType::plane) {
+    const Eigen::Vector3d dir = n.cross(other->dir);
+    if (dir.norm() < 0.05 || closed) return false;  // (nearly) parallel planes meet nowhere sensible
+    // The point of both planes closest to the chain's centroid.
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (const auto& p : pts) c += p;
+    c /= pts.size();
+    Eigen::Matrix3d A;
+    A.row(0) = n.transpose();
+    A.row(1) = other->dir.transpose();
+    A.row(2) = dir.normalized().transpose();
+    const Eigen::Vector3d rhs(n.dot(plane->point), other->dir.dot(other->point), dir.normalized().dot(c));
+    out = clipped_line(A.colPivHouseholderQr().solve(rhs), dir.normalized(), pts);
+    return true;
+  }
+  if (other->type != ShapeType::cylinder && other->type != ShapeType::cone) return false;
+  const Eigen::Vector3d& axis = other->dir;
+  if (std::abs(axis.dot(n)) < std::cos(2.0 * M_PI / 180.0)) return false;  // an ellipse: fitted generically
+  const double t = n.dot(plane->point - other->point) / axis.dot(n);
+  const Eigen::Vector3d center = other->point + t * axis;
+  const double radius =
+      other->type == ShapeType::cylinder ? other->radius : std::abs(t) * std::tan(other->half_angle_deg * M_PI / 180.0);
+  if (!(radius > 0)) return false;
+  out = circle_through(center, n, radius, pts, closed);
+  return true;
+}
+
+}  // namespace
+
+std::vector<TracedLine> trace_lines(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals,
+                                    const Segmentation& seg, double min_crease_deg, double tolerance, bool noisy) {
+  const int ne = static_cast<int>(m.edges.size());
+  const double cos_min = std::cos(min_crease_deg * M_PI / 180.0);
+  // Line edges and the (sorted) pair of patches each one separates.
+  std::vector<std::pair<int, int>> pair(ne, {-2, -2});
+  std::vector<std::vector<int>> at(m.vertices());
+  for (int e = 0; e < ne; ++e) {
+    const auto& E = m.edges[e];
+    const int a = seg.face_region[E.f0];
+    const int b = E.f1 < 0 ? -1 : seg.face_region[E.f1];
+    if (a == b) continue;
+    if (b >= 0) {
+      const Eigen::Vector3d mid = 0.5 * (m.pos[E.v0] + m.pos[E.v1]);
+      const Eigen::Vector3d na = oriented_normal(seg.regions[a], mid, normals[E.f0]);
+      const Eigen::Vector3d nb = oriented_normal(seg.regions[b], mid, normals[E.f1]);
+      if (na.dot(nb) > cos_min) continue;  // a smooth (tangent) junction of two patches is no line
+    }
+    pair[e] = {std::min(a, b), std::max(a, b)};
+    at[E.v0].push_back(e);
+    at[E.v1].push_back(e);
+  }
+  auto junction = [&](int v) {
+    return at[v].size() != 2 || pair[at[v][0]] != pair[at[v][1]];
+  };
+  std::vector<char> used(ne, 0);
+  std::vector<TracedLine> lines;
+  auto walk = [&](int start, int e) {
+    TracedLine line;
+    line.vertices.push_back(start);
+    int v = start;
+    while (true) {
+      used[e] = 1;
+      const auto& E = m.edges[e];
+      v = E.v0 == v ? E.v1 : E.v0;
+      if (v == start) {
+        line.closed = true;
+        break;
+      }
+      line.vertices.push_back(v);
+      if (junction(v)) break;
+      e = at[v][0] == e ? at[v][1] : at[v][0];
+      if (used[e]) break;
+    }
+    const auto [lo, hi] = pair[e];
+    line.region_a = lo == -1 ? hi : lo;
+    line.region_b = lo == -1 ? -1 : hi;
+    lines.push_back(std::move(line));
+  };
+  for (int v = 0; v < m.vertices(); ++v)
+    if (!at[v].empty() && junction(v))
+      for (int e : at[v])
+        if (!used[e]) walk(v, e);
+  for (int e = 0; e < ne; ++e)  // closed loops without junctions (a hole's rim)
+    if (pair[e].first != -2 && !used[e]) walk(m.edges[e].v0, e);
+
+  for (auto& line : lines) {
+    std::vector<Eigen::Vector3d> pts;
+    for (int v : line.vertices) pts.push_back(m.pos[v]);
+    Fit& fit = line.fit;
+    fit.shape.type = ShapeType::freeform;
+    if (pts.size() < 2) continue;
+    // A chain of mesh edges along a worn crease zigzags by up to half an edge on top of the noise.
+    const double line_tol = noisy ? std::hypot(tolerance, 0.5 * m.median_edge) : std::max(tolerance, 0.25 * m.median_edge);
+    Shape exact;
+    if (line.region_b >= 0 &&
+        intersection_curve(seg.regions[line.region_a].fit.shape, seg.regions[line.region_b].fit.shape, pts,
+                           line.closed, exact)) {
+      double worst = 0;
+      const double rms = rms_distance(exact, pts, &worst);
+      if (rms <= line_tol) {
+        fit.shape = exact;
+        fit.rms = rms;
+        fit.max_error = worst;
+        fit.ok = true;
+        continue;
+      }
+    }
+    Samples s;
+    s.points = pts;
+    if (!line.closed) {
+      Fit l = fit_line(s);
+      if (l.ok && l.rms <= line_tol) {
+        fit = l;
+        continue;
+      }
+    }
+    if (pts.size() >= 4) {
+      Fit c = fit_circle(s, line.closed);
+      if (c.ok && c.rms <= line_tol) {
+        fit = c;
+        continue;
+      }
+    }
+  }
+  return lines;
+}
+
+}  // namespace s2c::features

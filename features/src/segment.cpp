@@ -1,0 +1,486 @@
+#include "segment.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <queue>
+#include <set>
+#include <unordered_map>
+
+#include <spdlog/spdlog.h>
+#include <tbb/parallel_for.h>
+
+#include "s2c/core/disjoint_sets.h"
+
+namespace s2c::features {
+namespace {
+
+constexpr double kSeedTurnDeg = 20.0;
+/// Smallest patch on a noisy mesh: fewer faces cannot pin down a primitive against the noise.
+constexpr std::size_t kMinNoisyPatchFaces = 30;
+constexpr double kFreeformCrumbShare = 0.01;
+/// Seed neighbourhood of the fit-driven split: up to kSeedRings rings, stopping at kSeedFaces.
+constexpr int kSeedRings = 8;
+constexpr std::size_t kSeedFaces = 100;
+
+void log_regions(const char* stage, const std::vector<Region>& regions) {
+  if (!spdlog::should_log(spdlog::level::debug)) return;
+  for (std::size_t r = 0; r < regions.size(); ++r) {
+    const Fit& f = regions[r].fit;
+    spdlog::debug("{} region {}: {} faces, {} rms {:.4g} normal rms {:.3g}°", stage, r, regions[r].faces.size(),
+                  shape_name(f.shape.type), f.rms, f.normal_rms_deg);
+  }
+}
+
+/// Faces sharing a vertex with f (f excluded), appended to `out`.
+void face_ring(const MeshArrays& m, int f, std::vector<int>& out) {
+  out.clear();
+  for (int v : m.tri[f])
+    for (int k = m.vf_start[v]; k < m.vf_start[v + 1]; ++k)
+      if (m.vf[k] != f) out.push_back(m.vf[k]);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
+bool sharp_edge(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, int e, double cos_min) {
+  const auto& E = m.edges[e];
+  if (E.f1 < 0) return true;
+  return normals[E.f0].dot(normals[E.f1]) < cos_min;
+}
+
+/// Connected components of `faces` (a mask) across non-sharp edges.
+std::vector<std::vector<int>> flood_fill(const MeshArrays& m, const std::vector<char>& sharp,
+                                         const std::vector<char>& usable) {
+  const int nf = m.faces();
+  DisjointSets sets(nf);
+  for (int e = 0; e < static_cast<int>(m.edges.size()); ++e) {
+    const auto& E = m.edges[e];
+    if (sharp[e] || E.f1 < 0 || !usable[E.f0] || !usable[E.f1]) continue;
+    sets.unite(E.f0, E.f1);
+  }
+  std::unordered_map<int, int> index;
+  std::vector<std::vector<int>> out;
+  for (int f = 0; f < nf; ++f) {
+    if (!usable[f]) continue;
+    auto [it, fresh] = index.emplace(sets.find(f), static_cast<int>(out.size()));
+    if (fresh) out.emplace_back();
+    out[it->second].push_back(f);
+  }
+  return out;
+}
+
+double area_of(const MeshArrays& m, const std::vector<int>& faces) {
+  double a = 0;
+  for (int f : faces) a += m.farea[f];
+  return a;
+}
+
+/// Cost of giving face f to a region: distance of the face to the region's shape in tolerances,
+/// plus the normal disagreement. Freeform regions only have the normal of the neighbour face.
+double growth_cost(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, int f, const Region& r,
+                   int via, double tolerance) {
+  const Eigen::Vector3d& n = normals[f];
+  if (r.fit.shape.type == ShapeType::freeform) return 2.0 * (1.0 - n.dot(normals[via])) + 1.0;
+  double d = 0;
+  for (int v : m.tri[f]) d = std::max(d, distance(r.fit.shape, m.pos[v]));
+  const Eigen::Vector3d sn = surface_normal(r.fit.shape, m.centroid[f]);
+  const double agree = std::abs(sn.dot(n));
+  return d / tolerance + 4.0 * (1.0 - agree);
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3d> filter_normals(const MeshArrays& m, int iterations, double sigma_r) {
+  std::vector<Eigen::Vector3d> n = m.fnormal, next(m.faces());
+  const double sigma_s = std::max(m.mean_edge, 1e-12);
+  // Plain bilateral filtering keeps outliers: a sliver whose noisy normal is 50° off its
+  // neighbours sees them all as "across a crease" and stays as it is. The first iterations
+  // therefore compare neighbours with a guide, the vector median of the 1-ring (the ring normal
+  // closest to all others, area-weighted), which ignores outliers yet stays on one side of a crease.
+  constexpr int kGuidedIterations = 2;
+  for (int it = 0; it < iterations; ++it) {
+    const bool guided = it < kGuidedIterations;
+    const double sigma_now = sigma_r;
+    tbb::parallel_for(tbb::blocked_range<int>(0, m.faces(), 512), [&](const tbb::blocked_range<int>& range) {
+      std::vector<int> ring;
+      for (int f = range.begin(); f < range.end(); ++f) {
+        face_ring(m, f, ring);
+        Eigen::Vector3d guide = n[f];
+        if (guided) {
+          ring.push_back(f);
+          double best = std::numeric_limits<double>::infinity();
+          for (int a : ring) {
+            double cost = 0;
+            for (int b : ring) cost += m.farea[b] * (n[a] - n[b]).norm();
+            if (cost < best) best = cost, guide = n[a];
+          }
+          ring.pop_back();
+        }
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        auto add = [&](int g) {
+          const double ds = (m.centroid[f] - m.centroid[g]).norm() / sigma_s;
+          const double dr = (guide - n[g]).norm() / sigma_now;
+          sum += m.farea[g] * std::exp(-0.5 * (ds * ds + dr * dr)) * n[g];
+        };
+        add(f);
+        for (int g : ring) add(g);
+        const double len = sum.norm();
+        next[f] = len > 0 ? Eigen::Vector3d(sum / len) : n[f];
+      }
+    });
+    n.swap(next);
+  }
+  return n;
+}
+
+Samples region_samples(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, const std::vector<int>& faces) {
+  std::unordered_map<int, int> slot;
+  slot.reserve(faces.size() * 2);
+  Samples s;
+  for (int f : faces)
+    for (int v : m.tri[f]) {
+      auto [it, fresh] = slot.emplace(v, static_cast<int>(s.points.size()));
+      if (fresh) {
+        s.points.push_back(m.pos[v]);
+        s.normals.push_back(Eigen::Vector3d::Zero());
+        s.weights.push_back(0.0);
+      }
+      s.normals[it->second] += m.farea[f] * normals[f];
+      s.weights[it->second] += m.farea[f] / 3.0;
+    }
+  for (auto& n : s.normals) {
+    const double len = n.norm();
+    if (len > 0) n /= len;
+  }
+  return s;
+}
+
+Fit choose_shape(const Samples& s, const SegmentParams& p) {
+  auto acceptable = [&](const Fit& f) {
+    return f.ok && f.rms <= p.tolerance && f.normal_rms_deg <= p.normal_tol_deg;
+  };
+  // Distances alone cannot tell shapes apart on CAD tessellations whose vertices lie on two rims
+  // (a sphere, a cone and often a cylinder pass exactly through two circles), nor a plane from a
+  // strip of a noisy cylinder: the normals can. Score distance and normal residuals against their
+  // tolerances; a more complex shape must halve the score of a simpler one to win.
+  auto score = [&](const Fit& f) {
+    const double d = f.rms / p.tolerance, n = f.normal_rms_deg / p.normal_tol_deg;
+    return d * d + n * n;
+  };
+  const double huge = 20.0 * p.diagonal;
+  const Fit plane = fit_plane(s);
+  Fit freeform;
+  freeform.shape.type = ShapeType::freeform;
+  freeform.rms = plane.ok ? plane.rms : 0.0;
+  const Fit* chosen = acceptable(plane) ? &plane : nullptr;
+  if (chosen && score(plane) < 1e-6) return plane;  // exactly flat: nothing can do better
+  const Fit candidates[] = {fit_sphere(s), fit_cylinder(s), fit_cone(s)};
+  for (const Fit& c : candidates) {
+    if (!acceptable(c)) continue;
+    if (c.shape.type != ShapeType::cone && !(c.shape.radius < huge)) continue;
+    if (c.shape.type == ShapeType::cone && (c.shape.half_angle_deg < 2.0 || c.shape.half_angle_deg > 88.0)) continue;
+    // Against a plane a curved shape must halve the score; among the curved ones (a narrow noisy
+    // cone band is nearly a sphere zone) a clear 20 % decides.
+    const double margin = chosen == &plane ? 0.5 : 0.8;
+    if (!chosen || score(c) < margin * score(*chosen)) chosen = &c;
+  }
+  return chosen ? *chosen : freeform;
+}
+
+namespace {
+
+/// Splits a region no single primitive fits (a cylinder running tangentially into a hemisphere,
+/// noisy creases the flood fill leaked through) by fit-driven region growing: from a seed face,
+/// fit the simplest shape to its neighbourhood, grow over faces within tolerance of that shape,
+/// refit as it grows, carve it out, repeat on the rest.
+std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals,
+                                 const std::vector<VertexTensor>& tensors, const std::vector<int>& faces,
+                                 const SegmentParams& p) {
+  std::unordered_map<int, char> remaining;
+  for (int f : faces) remaining[f] = 1;
+  const double cos_tol = std::cos(p.normal_tol_deg * M_PI / 180.0);
+  auto fits = [&](const Shape& shape, int f) {
+    for (int v : m.tri[f])
+      if (distance(shape, m.pos[v]) > 1.5 * p.tolerance) return false;
+    return std::abs(surface_normal(shape, m.centroid[f]).dot(normals[f])) >= cos_tol;
+  };
+  auto neighbours = [&](int f, auto&& visit) {
+    for (int e : m.face_edges[f]) {
+      if (e < 0) continue;
+      const int g = m.across(e, f);
+      if (g >= 0) visit(g);
+    }
+  };
+  // Seeds: interior faces (all vertices face-type) first, larger first.
+  std::vector<int> order(faces);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    auto interior = [&](int f) {
+      for (int v : m.tri[f])
+        if (tensors[v].cls != VertexClass::face) return false;
+      return true;
+    };
+    const bool ia = interior(a), ib = interior(b);
+    if (ia != ib) return ia;
+    return m.farea[a] > m.farea[b];
+  });
+  std::vector<Region> out;
+  std::vector<int> leftovers;
+  // Faces near a seed no shape fitted are not tried as seeds again (on a freeform surface every
+  // face would cost two fits otherwise), but other regions may still grow over them.
+  std::unordered_map<int, char> tried;
+  for (int seed : order) {
+    if (!remaining.count(seed) || !remaining[seed] || tried.count(seed)) continue;
+    // The seed's neighbourhood: rings of faces inside the region until it holds kSeedFaces faces,
+    // so that a finely refined faceted cylinder is seen as a cylinder, not as one flat facet; if
+    // no shape fits that (the neighbourhood crossed a tangent edge), two rings.
+    auto neighbourhood = [&](int rings, std::size_t enough) {
+      std::vector<int> faces_near = {seed};
+      std::unordered_map<int, char> seen = {{seed, 1}};
+      for (int ring = 0; ring < rings && faces_near.size() < enough; ++ring) {
+        const std::size_t n = faces_near.size();
+        for (std::size_t i = 0; i < n; ++i)
+          neighbours(faces_near[i], [&](int g) {
+            if (remaining.count(g) && remaining[g] && !seen.count(g)) seen[g] = 1, faces_near.push_back(g);
+          });
+      }
+      return faces_near;
+    };
+    std::vector<int> current = neighbourhood(kSeedRings, kSeedFaces);
+    Fit fit = choose_shape(region_samples(m, normals, current), p);
+    if (fit.shape.type == ShapeType::freeform && current.size() > 20)
+      fit = choose_shape(region_samples(m, normals, neighbourhood(2, std::numeric_limits<std::size_t>::max())), p);
+    if (fit.shape.type == ShapeType::freeform) {
+      for (int f : current) tried[f] = 1;
+      continue;
+    }
+    // Grow over faces the shape explains; refit whenever the region has grown by half.
+    current = {seed};
+    std::unordered_map<int, char> in = {{seed, 1}};
+    std::size_t fitted_size = 1;
+    for (std::size_t i = 0; i < current.size(); ++i) {
+      neighbours(current[i], [&](int g) {
+        if (remaining.count(g) && remaining[g] && !in.count(g) && fits(fit.shape, g)) in[g] = 1, current.push_back(g);
+      });
+      if (current.size() > fitted_size * 3 / 2 + 8) {
+        const Fit refit = choose_shape(region_samples(m, normals, current), p);
+        if (refit.shape.type == ShapeType::freeform) break;
+        fit = refit;
+        fitted_size = current.size();
+      }
+    }
+    for (int f : current) remaining[f] = 0;
+    if (current.size() < 3) {
+      leftovers.insert(leftovers.end(), current.begin(), current.end());
+      continue;
+    }
+    Region r;
+    r.faces = std::move(current);
+    r.fit = choose_shape(region_samples(m, normals, r.faces), p);
+    out.push_back(std::move(r));
+  }
+  for (int f : faces)
+    if (remaining[f]) leftovers.push_back(f);
+  if (!leftovers.empty()) {
+    Region r;
+    r.faces = std::move(leftovers);
+    r.fit.shape.type = ShapeType::freeform;
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+/// Grows the regions over the unassigned faces, cheapest face first (Dijkstra-like): each face
+/// goes to the neighbouring region whose shape explains it best, so patch borders settle on the
+/// crease. Faces no region reaches (islands) become one region per connected piece.
+void grow_regions(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, const SegmentParams& p,
+                  Segmentation& seg) {
+  const int nf = m.faces();
+  using Item = std::tuple<double, int, int, int>;  // cost, face, region, via face
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
+  auto push_neighbours = [&](int f) {
+    const int r = seg.face_region[f];
+    for (int e : m.face_edges[f]) {
+      if (e < 0) continue;
+      const int g = m.across(e, f);
+      if (g >= 0 && seg.face_region[g] < 0)
+        queue.emplace(growth_cost(m, normals, g, seg.regions[r], f, p.tolerance), g, r, f);
+    }
+  };
+  for (int f = 0; f < nf; ++f)
+    if (seg.face_region[f] >= 0) push_neighbours(f);
+  while (!queue.empty()) {
+    auto [cost, f, r, via] = queue.top();
+    queue.pop();
+    if (seg.face_region[f] >= 0) continue;
+    seg.face_region[f] = r;
+    seg.regions[r].faces.push_back(f);
+    ++seg.grown_faces;
+    push_neighbours(f);
+  }
+  std::vector<char> left(nf, 0);
+  bool any = false;
+  for (int f = 0; f < nf; ++f) any |= (left[f] = seg.face_region[f] < 0);
+  if (!any) return;
+  const std::vector<char> none(m.edges.size(), 0);
+  for (auto& faces : flood_fill(m, none, left)) {
+    Region r;
+    r.faces = std::move(faces);
+    for (int f : r.faces) seg.face_region[f] = static_cast<int>(seg.regions.size());
+    seg.regions.push_back(std::move(r));
+  }
+}
+
+/// Drops the regions for which `drop` is true and renumbers the rest; faces of dropped regions
+/// become unassigned (-1).
+template <class Drop>
+void drop_regions(Segmentation& seg, Drop drop) {
+  std::vector<int> remap(seg.regions.size(), -1);
+  std::vector<Region> kept;
+  for (std::size_t r = 0; r < seg.regions.size(); ++r)
+    if (!drop(seg.regions[r])) {
+      remap[r] = static_cast<int>(kept.size());
+      kept.push_back(std::move(seg.regions[r]));
+    }
+  seg.regions = std::move(kept);
+  for (int& r : seg.face_region)
+    if (r >= 0) r = remap[r];
+}
+
+}  // namespace
+
+Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals,
+                     const std::vector<VertexTensor>& tensors, const SegmentParams& p) {
+  const int nf = m.faces(), ne = static_cast<int>(m.edges.size());
+  // On a noisy mesh the filtered normals still turn by a few degrees between neighbours, and a
+  // small hole's wall turns by edge/radius: the seeds are cut where they turn by more than
+  // kSeedTurnDeg, a stricter barrier than the crease angle, so no seed leaks across a worn crease.
+  const double barrier_deg = p.noisy ? std::min(p.min_crease_deg, kSeedTurnDeg) : p.min_crease_deg;
+  const double cos_min = std::cos(barrier_deg * M_PI / 180.0);
+  std::vector<char> sharp(ne);
+  for (int e = 0; e < ne; ++e) sharp[e] = sharp_edge(m, normals, e, cos_min);
+
+  Segmentation seg;
+  const std::vector<char> usable(nf, 1);
+  auto components = flood_fill(m, sharp, usable);
+  const std::size_t min_seed = p.noisy ? 6 : 1;
+  for (auto& faces : components) {
+    if (faces.size() < min_seed) continue;
+    Region r;
+    r.faces = std::move(faces);
+    seg.regions.push_back(std::move(r));
+  }
+  seg.seeds = seg.regions.size();
+  seg.face_region.assign(nf, -1);
+  for (int r = 0; r < static_cast<int>(seg.regions.size()); ++r)
+    for (int f : seg.regions[r].faces) seg.face_region[f] = r;
+  auto fit_region = [&](Region& r) {
+    r.fit = choose_shape(region_samples(m, normals, r.faces), p);
+    r.area = area_of(m, r.faces);
+  };
+  tbb::parallel_for(0, static_cast<int>(seg.regions.size()), [&](int r) { fit_region(seg.regions[r]); });
+  log_regions("seed", seg.regions);
+
+  if (p.noisy) {
+    grow_regions(m, normals, p, seg);
+    tbb::parallel_for(0, static_cast<int>(seg.regions.size()), [&](int r) { fit_region(seg.regions[r]); });
+    log_regions("grown", seg.regions);
+  }
+
+  // Regions no primitive fits are split by fit-driven region growing.
+  {
+    std::vector<Region> all;
+    for (auto& r : seg.regions) {
+      if (r.fit.shape.type != ShapeType::freeform || r.faces.size() < 6) {
+        all.push_back(std::move(r));
+        continue;
+      }
+      for (auto& part : split_region(m, normals, tensors, r.faces, p)) {
+        part.area = area_of(m, part.faces);
+        all.push_back(std::move(part));
+        ++seg.splits;
+      }
+      --seg.splits;
+    }
+    seg.regions = std::move(all);
+    for (int r = 0; r < static_cast<int>(seg.regions.size()); ++r)
+      for (int f : seg.regions[r].faces) seg.face_region[f] = r;
+  }
+
+  if (p.noisy) {
+    // Crumbs along worn creases (a few faces the growth or the split left over) are no patches:
+    // their faces go to the neighbours that explain them best.
+    // Small freeform leftovers of the split (a noisy band along a crease) go the same way.
+    auto crumb = [&](const Region& r) {
+      return r.faces.size() < kMinNoisyPatchFaces ||
+             (r.fit.shape.type == ShapeType::freeform && r.faces.size() < kFreeformCrumbShare * nf);
+    };
+    const std::size_t before = seg.regions.size();
+    for (const auto& r : seg.regions)
+      if (crumb(r))
+        for (int f : r.faces) seg.face_region[f] = -1;
+    drop_regions(seg, crumb);
+    if (seg.regions.size() < before) {
+      grow_regions(m, normals, p, seg);
+      tbb::parallel_for(0, static_cast<int>(seg.regions.size()), [&](int r) { fit_region(seg.regions[r]); });
+    }
+    seg.absorbed = before - seg.regions.size();
+  }
+
+  // Merge neighbours that are one primitive (a plane cut by a spurious crease, a cylinder split
+  // in two): same type, and the union still fits within tolerance.
+  // A pair that failed to merge is not tried again while both regions are unchanged (the key:
+  // first face and size of each; merging changes both).
+  std::set<std::array<std::size_t, 4>> refused;
+  auto key_of = [](const Region& A, const Region& B) {
+    return std::array<std::size_t, 4>{static_cast<std::size_t>(A.faces.front()), A.faces.size(),
+                                      static_cast<std::size_t>(B.faces.front()), B.faces.size()};
+  };
+  bool merged = true;
+  while (merged) {
+    merged = false;
+    std::vector<std::pair<int, int>> pairs;
+    for (const auto& E : m.edges) {
+      if (E.f1 < 0) continue;
+      int a = seg.face_region[E.f0], b = seg.face_region[E.f1];
+      if (a == b || a < 0 || b < 0) continue;
+      if (a > b) std::swap(a, b);
+      pairs.emplace_back(a, b);
+    }
+    std::sort(pairs.begin(), pairs.end());
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    std::vector<char> touched(seg.regions.size(), 0);
+    for (auto [a, b] : pairs) {
+      if (touched[a] || touched[b]) continue;
+      Region& A = seg.regions[a];
+      Region& B = seg.regions[b];
+      if (A.fit.shape.type != B.fit.shape.type || A.fit.shape.type == ShapeType::freeform) continue;
+      // Across a real crease two planes never fit one plane; this guards near-tangent cases.
+      if (A.fit.shape.type == ShapeType::plane &&
+          std::abs(A.fit.shape.dir.dot(B.fit.shape.dir)) < std::cos(2.0 * M_PI / 180))
+        continue;
+      const auto key = key_of(A, B);
+      if (refused.count(key)) continue;
+      std::vector<int> faces = A.faces;
+      faces.insert(faces.end(), B.faces.begin(), B.faces.end());
+      const Fit f = choose_shape(region_samples(m, normals, faces), p);
+      if (f.shape.type != A.fit.shape.type) {
+        refused.insert(key);
+        continue;
+      }
+      A.faces = std::move(faces);
+      A.fit = f;
+      A.area += B.area;
+      for (int g : B.faces) seg.face_region[g] = a;
+      B.faces.clear();
+      touched[a] = touched[b] = 1;
+      ++seg.merges;
+      merged = true;
+    }
+    if (merged) drop_regions(seg, [](const Region& r) { return r.faces.empty(); });
+  }
+  for (auto& r : seg.regions) std::sort(r.faces.begin(), r.faces.end());
+  return seg;
+}
+
+}  // namespace s2c::features

@@ -1,0 +1,48 @@
+#pragma once
+// Feature patches: faces flood-filled inside sharp edges, fitted with plane / sphere / cylinder /
+// cone, neighbours with the same primitive merged. On noisy meshes the flood fill starts from
+// seed faces away from creases (tensor voting says which) and the crease band is then grown
+// into the patch whose fitted shape explains each face best.
+#include <vector>
+
+#include "mesh_arrays.h"
+#include "s2c/features/analyze.h"
+#include "s2c/features/shape.h"
+
+namespace s2c::features {
+
+struct SegmentParams {
+  double min_crease_deg = 20.0;
+  double tolerance = 0.0;        ///< fit acceptance RMS, mm
+  double normal_tol_deg = 10.0;  ///< fit acceptance RMS normal angle
+  bool noisy = false;            ///< seeds + growth instead of a plain flood fill
+  double diagonal = 1.0;
+};
+
+struct Region {
+  std::vector<int> faces;
+  Fit fit;  ///< fit.shape.type == freeform when no primitive is accepted
+  double area = 0.0;
+};
+
+struct Segmentation {
+  std::vector<int> face_region;  ///< per face
+  std::vector<Region> regions;
+  std::size_t merges = 0, seeds = 0, grown_faces = 0, splits = 0, absorbed = 0;
+};
+
+/// Bilateral filtering of face normals (Zheng et al. 2011): smooths noise, keeps creases.
+std::vector<Eigen::Vector3d> filter_normals(const MeshArrays& m, int iterations, double sigma_r);
+
+/// Picks the simplest primitive whose fit is within tolerance (plane, sphere, cylinder, cone), or
+/// freeform. Exposed for tests.
+Fit choose_shape(const Samples& s, const SegmentParams& p);
+
+Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals,
+                     const std::vector<VertexTensor>& tensors, const SegmentParams& p);
+
+/// The samples of a set of faces: each vertex once, with the area-weighted normal of the set's
+/// faces around it (so a crease vertex gets this side's normal) and a third of their area.
+Samples region_samples(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, const std::vector<int>& faces);
+
+}  // namespace s2c::features

@@ -1,0 +1,80 @@
+#include "tensor_voting.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "s2c/core/distance.h"
+#include "s2c/core/errors.h"
+
+namespace s2c::features {
+
+VotingThresholds voting_thresholds(double min_crease_deg, double noise, double edge) {
+  const double half = 0.5 * min_crease_deg * M_PI / 180.0;
+  const double slope = edge > 0 ? noise / edge : 0.0;
+  VotingThresholds t;
+  t.crease = 0.5 * std::tan(half) * std::tan(half) + 2.0 * slope * slope;
+  t.corner = 0.5 * t.crease + 2.0 * slope * slope;
+  return t;
+}
+
+std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, double radius,
+                               const VotingThresholds& t) {
+  const int nv = m.vertices(), nf = m.faces();
+  std::vector<VertexTensor> out(nv);
+  // μ_f = (A_f / A_max) exp(−d / (σ/3)) with σ the voting radius. Two deviations from the paper,
+  // both for CAD tessellations with long skinny triangles: d is the distance from the vertex to
+  // the triangle (not to its centroid, which can be far away for a face touching the vertex), and
+  // the area is capped at the area of the voting disc so one huge face cannot outvote the rest.
+  const double disc = M_PI * radius * radius;
+  struct Scratch {
+    std::vector<int> mark;
+    std::vector<int> queue;
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch([nf] { return Scratch{std::vector<int>(nf, -1), {}}; });
+  tbb::parallel_for(tbb::blocked_range<int>(0, nv, 256), [&](const tbb::blocked_range<int>& range) {
+    Scratch& s = scratch.local();
+    for (int v = range.begin(); v < range.end(); ++v) {
+      const Eigen::Vector3d p = m.pos[v];
+      Eigen::Matrix3d T = Eigen::Matrix3d::Zero();
+      s.queue.clear();
+      for (int k = m.vf_start[v]; k < m.vf_start[v + 1]; ++k) {
+        s.mark[m.vf[k]] = v;
+        s.queue.push_back(m.vf[k]);
+      }
+      for (std::size_t q = 0; q < s.queue.size(); ++q) {
+        const int f = s.queue[q];
+        const auto& tri = m.tri[f];
+        const bool incident = tri[0] == v || tri[1] == v || tri[2] == v;
+        const double d = incident ? 0.0 : (closest_point_on_triangle(p, m.pos[tri[0]], m.pos[tri[1]], m.pos[tri[2]]) - p).norm();
+        if (d > radius) continue;
+        const double mu = std::min(m.farea[f], disc) / disc * std::exp(-3.0 * d / radius);
+        const Eigen::Vector3d& n = normals[f];
+        T.noalias() += mu * n * n.transpose();
+        for (int u : tri)
+          for (int k = m.vf_start[u]; k < m.vf_start[u + 1]; ++k)
+            if (s.mark[m.vf[k]] != v) {
+              s.mark[m.vf[k]] = v;
+              s.queue.push_back(m.vf[k]);
+            }
+      }
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+      es.computeDirect(T);
+      const Eigen::Vector3d ev = es.eigenvalues();  // ascending
+      VertexTensor& out_v = out[v];
+      if (!(ev[2] > 0)) continue;  // isolated vertex or only degenerate faces: a face vertex
+      out_v.lambda = Eigen::Vector3d(1.0, std::max(ev[1], 0.0) / ev[2], std::max(ev[0], 0.0) / ev[2]);
+      out_v.e1 = es.eigenvectors().col(2);
+      out_v.e3 = es.eigenvectors().col(0);
+      out_v.cls = out_v.lambda[2] > t.corner ? VertexClass::corner
+                  : out_v.lambda[1] > t.crease ? VertexClass::crease
+                                               : VertexClass::face;
+    }
+  });
+  return out;
+}
+
+}  // namespace s2c::features
