@@ -11,12 +11,20 @@
 #include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
 
+#include "fit_util.h"
 #include "s2c/core/disjoint_sets.h"
 
 namespace s2c::features {
 namespace {
 
 constexpr double kSeedTurnDeg = 20.0;
+/// Latitude span (radians, ≈ 30°) below which a sphere zone is ambiguous with a cone band.
+constexpr double kNarrowZoneRad = 0.5;
+/// How much larger a cone's RMS distance may be than a sphere's and it still takes a narrow band
+/// (see choose_shape; the normals are not compared: smoothing at the creases biases them).
+constexpr double kChamferPreference = 1.15;
+/// A band wraps at least this far around its axis (radians, 90°).
+constexpr double kBandTurnRad = M_PI / 2;
 /// Smallest patch on a noisy mesh: fewer faces cannot pin down a primitive against the noise.
 constexpr std::size_t kMinNoisyPatchFaces = 30;
 constexpr double kFreeformCrumbShare = 0.01;
@@ -156,6 +164,38 @@ Samples region_samples(const MeshArrays& m, const std::vector<Eigen::Vector3d>& 
   return s;
 }
 
+namespace {
+
+/// Do the samples form a narrow band around the cone's axis: less than kNarrowZoneRad of
+/// latitude on a sphere of radius r (their extent along the axis, over r), and around the axis
+/// at least a quarter turn, as an annulus (a small patch anywhere on a sphere is narrow, but it is
+/// no band)?
+bool narrow_zone(const Samples& s, const Shape& cone, double r) {
+  if (!(r > 0) || s.points.empty()) return false;
+  const auto uv = fit::perpendicular_frame(cone.dir);
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo, r_min = lo, r_max = 0;
+  std::vector<double> azimuth;
+  azimuth.reserve(s.points.size());
+  for (const auto& q : s.points) {
+    const Eigen::Vector3d d = q - cone.point;
+    const double h = cone.dir.dot(d);
+    lo = std::min(lo, h);
+    hi = std::max(hi, h);
+    const double x = uv.col(0).dot(d), y = uv.col(1).dot(d), radial = std::hypot(x, y);
+    r_min = std::min(r_min, radial);
+    r_max = std::max(r_max, radial);
+    azimuth.push_back(std::atan2(y, x));
+  }
+  // A band is an annulus around the axis, not a cap: the pole of a sphere wraps its own axis.
+  if (!(hi - lo < kNarrowZoneRad * r) || !(r_min > 0.5 * r_max)) return false;
+  std::sort(azimuth.begin(), azimuth.end());
+  double gap = azimuth.front() + 2 * M_PI - azimuth.back();
+  for (std::size_t i = 1; i < azimuth.size(); ++i) gap = std::max(gap, azimuth[i] - azimuth[i - 1]);
+  return 2 * M_PI - gap >= kBandTurnRad;
+}
+
+}  // namespace
+
 Fit choose_shape(const Samples& s, const SegmentParams& p) {
   auto acceptable = [&](const Fit& f) {
     return f.ok && f.rms <= p.tolerance && f.normal_rms_deg <= p.normal_tol_deg;
@@ -176,15 +216,27 @@ Fit choose_shape(const Samples& s, const SegmentParams& p) {
   const Fit* chosen = acceptable(plane) ? &plane : nullptr;
   if (chosen && score(plane) < 1e-6) return plane;  // exactly flat: nothing can do better
   const Fit candidates[] = {fit_sphere(s), fit_cylinder(s), fit_cone(s)};
+  auto usable = [&](const Fit& c) {
+    if (!acceptable(c)) return false;
+    if (c.shape.type != ShapeType::cone && !(c.shape.radius < huge)) return false;
+    return c.shape.type != ShapeType::cone || (c.shape.half_angle_deg >= 2.0 && c.shape.half_angle_deg <= 88.0);
+  };
   for (const Fit& c : candidates) {
-    if (!acceptable(c)) continue;
-    if (c.shape.type != ShapeType::cone && !(c.shape.radius < huge)) continue;
-    if (c.shape.type == ShapeType::cone && (c.shape.half_angle_deg < 2.0 || c.shape.half_angle_deg > 88.0)) continue;
+    if (!usable(c)) continue;
     // Against a plane a curved shape must halve the score; among the curved ones (a narrow noisy
     // cone band is nearly a sphere zone) a clear 20 % decides.
     const double margin = chosen == &plane ? 0.5 : 0.8;
     if (!chosen || score(c) < margin * score(*chosen)) chosen = &c;
   }
+  // On a noisy mesh a narrow chamfer band fits a sphere zone better than its own cone: the
+  // filtered normals blend into both neighbours at the band's creases and so turn across the
+  // band as a sphere's do. A CAD part's narrow band between two creases is a chamfer far more
+  // often than a sphere zone, so the cone takes it unless it is clearly farther from the samples. (Not on clean
+  // tessellations: there each ring of a faceted sphere is exactly a cone band.)
+  const Fit& cone = candidates[2];
+  if (p.noisy && chosen == &candidates[0] && usable(cone) && cone.rms <= kChamferPreference * chosen->rms &&
+      narrow_zone(s, cone.shape, chosen->shape.radius))
+    chosen = &cone;
   return chosen ? *chosen : freeform;
 }
 

@@ -111,7 +111,7 @@ TEST_P(NoisyPart, KeepsItsPrimitivesAtSigmaPointTwoEdgeLengths) {
   EXPECT_LT(a.noise, 0.4 * h);
 }
 
-INSTANTIATE_TEST_SUITE_P(Parts, NoisyPart, ::testing::Values("plate", "bracket", "pocket"));
+INSTANTIATE_TEST_SUITE_P(Parts, NoisyPart, ::testing::Values("plate", "shaft", "bracket", "pocket"));
 
 TEST(FeaturesReal, CgalFandiskHasPlanesCylindersAndLines) {
   const Mesh mesh = read_mesh(test::shared_dir() / "data/real/cad/cgal_fandisk.off");
