@@ -10,6 +10,7 @@
 
 #include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include "fit_util.h"
 #include "s2c/core/disjoint_sets.h"
@@ -215,7 +216,10 @@ Fit choose_shape(const Samples& s, const SegmentParams& p) {
   freeform.rms = plane.ok ? plane.rms : 0.0;
   const Fit* chosen = acceptable(plane) ? &plane : nullptr;
   if (chosen && score(plane) < 1e-6) return plane;  // exactly flat: nothing can do better
-  const Fit candidates[] = {fit_sphere(s), fit_cylinder(s), fit_cone(s)};
+  // The three fits are independent and each costs milliseconds (the cone most): run them at once.
+  Fit candidates[3];
+  tbb::parallel_invoke([&] { candidates[0] = fit_sphere(s); }, [&] { candidates[1] = fit_cylinder(s); },
+                       [&] { candidates[2] = fit_cone(s); });
   auto usable = [&](const Fit& c) {
     if (!acceptable(c)) return false;
     if (c.shape.type != ShapeType::cone && !(c.shape.radius < huge)) return false;
@@ -441,13 +445,19 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
 
   // Regions no primitive fits are split by fit-driven region growing.
   {
+    auto needs_split = [](const Region& r) { return r.fit.shape.type == ShapeType::freeform && r.faces.size() >= 6; };
+    const int nr = static_cast<int>(seg.regions.size());
+    std::vector<std::vector<Region>> parts(nr);  // regions are split independently, in parallel
+    tbb::parallel_for(0, nr, [&](int r) {
+      if (needs_split(seg.regions[r])) parts[r] = split_region(m, normals, tensors, seg.regions[r].faces, p);
+    });
     std::vector<Region> all;
-    for (auto& r : seg.regions) {
-      if (r.fit.shape.type != ShapeType::freeform || r.faces.size() < 6) {
-        all.push_back(std::move(r));
+    for (int r = 0; r < nr; ++r) {
+      if (!needs_split(seg.regions[r])) {
+        all.push_back(std::move(seg.regions[r]));
         continue;
       }
-      for (auto& part : split_region(m, normals, tensors, r.faces, p)) {
+      for (auto& part : parts[r]) {
         part.area = area_of(m, part.faces);
         all.push_back(std::move(part));
         ++seg.splits;
