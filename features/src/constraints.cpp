@@ -1,8 +1,9 @@
 // Constraint analysis (paper §3.3): every pair of fitted features is tested for the constraint
 // kinds; the result is stated once, in the least redundant form a CAD designer would write.
 //
-// What takes part: patches of at least `min_patch_area` and lines touching none smaller (see
-// ConstraintOptions), whose shape is not freeform and whose numbers are usable
+// What takes part: patches of at least `min_patch_area` and, when that is set, lines touching
+// no patch that is smaller or freeform (see ConstraintOptions), whose shape is not freeform and
+// whose numbers are usable
 // (finite, a non-zero direction, radius / length > 0, cone half angle in (0°, 90°)). Feature order
 // is patches then lines, each in file order; members are listed in that order.
 //
@@ -182,8 +183,10 @@ class Detector {
     for (int i = 0; i < np_; ++i) {
       shape_[i] = usable(f.patches[i].shape);
       if (shape_[i] && !is_surface_type(shape_[i]->type)) shape_[i].reset();
-      small[i] = f.patches[i].area < o.min_patch_area;
-      if (small[i]) shape_[i].reset();
+      if (f.patches[i].area < o.min_patch_area) shape_[i].reset();
+      // With a minimum area (noisy meshes), a patch without a usable shape disqualifies its lines
+      // just like a small one: its borders are where fitting gave up, not CAD edges.
+      small[i] = o.min_patch_area > 0 && !shape_[i];
       area_[i] = f.patches[i].area;
       index.emplace(f.patches[i].id, i);
     }
@@ -201,7 +204,7 @@ class Detector {
       pairs.emplace(std::min(ia->second, ib->second), std::max(ia->second, ib->second));
     }
     adjacent_.assign(pairs.begin(), pairs.end());
-    // A line touching a patch too small to take part is as doubtful as the patch.
+    // A line touching such a patch is as doubtful as the patch.
     for (auto [a, b] : adjacent_)
       if (a < np_ && b >= np_ && small[a]) shape_[b].reset();
     for (auto [a, b] : adjacent_) {

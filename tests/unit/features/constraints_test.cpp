@@ -803,7 +803,7 @@ TEST(ConstraintsTest, FreeformAndUnusableShapesTakeNoPart) {
   EXPECT_TRUE(has(p.f, ConstraintKind::equal_radius, {p.id["hole_2"], p.id["hole_3"]}));
 }
 
-TEST(ConstraintsTest, PatchesBelowTheMinimumAreaAndTheirLinesTakeNoPart) {
+TEST(ConstraintsTest, PatchesBelowTheMinimumAreaOrFreeformAndTheirLinesTakeNoPart) {
   Part p = load_part("plate");
   for (auto& patch : p.f.patches) patch.area = 100.0;
   std::set<std::string> excluded = {p.id["hole_0"]};
@@ -814,13 +814,22 @@ TEST(ConstraintsTest, PatchesBelowTheMinimumAreaAndTheirLinesTakeNoPart) {
     if (b == p.id["hole_0"] && a[0] == 'L') excluded.insert(a);
   }
   ASSERT_GE(excluded.size(), 3u) << "hole_0 and its two rims";
+  // A freeform patch (fitting gave up) disqualifies its lines too, once a minimum area is set.
+  p.shape("hole_1").type = ShapeType::freeform;
+  excluded.insert(p.id["hole_1"]);
+  std::size_t rims = 0;
+  for (const auto& [a, b] : p.f.adjacency) {
+    if (a == p.id["hole_1"] && b[0] == 'L') excluded.insert(b), ++rims;
+    if (b == p.id["hole_1"] && a[0] == 'L') excluded.insert(a), ++rims;
+  }
+  ASSERT_GE(rims, 2u);
   ConstraintOptions o = options_for(p);
   o.min_patch_area = 10.0;
   detect_constraints(p.f, o);
   expect_all_hold(p.f);
   for (const Group* g : constraints(p.f))
     for (const auto& m : g->members) EXPECT_EQ(excluded.count(m), 0u) << m << " in " << g->id;
-  EXPECT_TRUE(has(p.f, ConstraintKind::equal_radius, {p.id["hole_1"], p.id["hole_2"], p.id["hole_3"]}));
+  EXPECT_TRUE(has(p.f, ConstraintKind::equal_radius, {p.id["hole_2"], p.id["hole_3"]}));
 }
 
 TEST(ConstraintsTest, EmptySetGivesNothing) {

@@ -16,9 +16,10 @@ struct ConstraintOptions {
   double radius_rel_tol = 0.01;   ///< equal_radius / equal_length relative tolerance
   double area_rel_tol = 0.05;     ///< symmetric: mirrored patches must have areas within this fraction
   int max_mirror_planes = 64;     ///< symmetric: candidate mirror planes tested (largest supporting area first)
-  /// Patches smaller than this (mm²) and the lines touching them take no part: on scan meshes
-  /// they are the reconstruction's artefacts (a constriction inside a hole the scanner never
-  /// saw), whose chance alignments would be stated as constraints. 0: every patch takes part.
+  /// Patches smaller than this (mm²) take no part, and when it is > 0 neither do the lines
+  /// touching a small or freeform patch: on scan meshes these are the reconstruction's artefacts
+  /// (a constriction inside a hole the scanner never saw, leftovers along rounded edges), whose
+  /// chance alignments would be stated as constraints. 0: every patch takes part.
   double min_patch_area = 0.0;
 };
 
