@@ -20,7 +20,8 @@ cmake --build "$build" -j "$(nproc)"
 if [[ "$mode" == demo ]]; then
   "$build/bin/scan2cad" run fixtures/scans/plate --out out
   echo
-  echo "Done. Results in out/: cloud.ply, mesh.ply, manifest.json, check.json (is it CAD-ready?)"
+  echo "Done. Results in out/: cloud.ply, mesh.ply, repaired.ply (CAD-ready mesh), features.json and segments.ply (features),"
+  echo "check.json (is it CAD-ready?), manifest.json, reports/ (per-stage reports)"
 else
   ctest --test-dir "$build" --output-on-failure -j 2 --timeout 900
 fi
