@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "s2c/core/cli.h"
+#include "s2c/core/clock.h"
 #include "s2c/reconstruct/register.h"
 #include "s2c/reconstruct/views.h"
 
@@ -49,7 +50,7 @@ int main(int argc, char** argv) {
     s2c::RegistrationOptions ro;
     ro.mode = s2c::RegistrationMode::global;
     const auto poses = s2c::register_views(views, spacing, ro, report);
-    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double secs = s2c::seconds_since(t0);
     nlohmann::json out = {{"views", nlohmann::json::array()}, {"seconds", secs}, {"spacing_mm", spacing}};
     double max_rot = 0, max_trans = 0;
     const Eigen::Isometry3d G0 = truth.at(names[0]);

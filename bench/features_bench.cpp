@@ -38,6 +38,7 @@
 #include <tbb/task_arena.h>
 
 #include "features_eval.h"
+#include "s2c/core/clock.h"
 #include "s2c/core/errors.h"
 #include "s2c/core/io.h"
 #include "s2c/features/analyze.h"
@@ -48,7 +49,6 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 std::vector<std::string> split(const std::string& s, char sep) {
   std::vector<std::string> out;
@@ -145,7 +145,7 @@ Run run_analyze(const Mesh& mesh) {
   Run r;
   const auto t0 = Clock::now();
   features::Analysis a = features::analyze(mesh, features::FeatureOptions{});
-  r.seconds = since(t0);
+  r.seconds = seconds_since(t0);
   r.features = std::move(a.features);
   return r;
 }
@@ -313,7 +313,7 @@ int cmd_speed(const Args& a) {
     nlohmann::json report;
     const auto t0 = Clock::now();
     const features::Analysis an = features::analyze(mesh, features::FeatureOptions{}, &report);
-    const double s = since(t0);
+    const double s = seconds_since(t0);
     std::fprintf(stderr, "run %d: %.3f s\n", i + 1, s);
     if (s < best) {
       best = s;

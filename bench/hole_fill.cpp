@@ -22,6 +22,7 @@
 
 #include "fill/rbf.h"
 #include "s2c/core/check.h"
+#include "s2c/core/clock.h"
 #include "s2c/core/distance.h"
 #include "s2c/core/io.h"
 #include "s2c/repair/fill.h"
@@ -37,7 +38,6 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // ----- test shapes ---------------------------------------------------------------------------
 
@@ -207,7 +207,7 @@ Outcome fill_ours(const Cut& cut, repair::FillMethod m) {
   const std::size_t before = s.vertices.size();
   const auto t0 = Clock::now();
   const auto r = repair::fill_holes(s, {cut.hole}, opt);
-  o.seconds = since(t0);
+  o.seconds = seconds_since(t0);
   o.ok = r[0].filled;
   o.note = r[0].filled ? to_string(r[0].method) : r[0].reason;
   if (o.ok) {
@@ -248,7 +248,7 @@ Outcome fill_cgal(const Cut& cut) {
   const auto t0 = Clock::now();
   const auto result = CGAL::Polygon_mesh_processing::triangulate_refine_and_fair_hole(
       m, h, std::back_inserter(faces), std::back_inserter(verts));
-  o.seconds = since(t0);
+  o.seconds = seconds_since(t0);
   o.ok = std::get<0>(result);
   o.note = o.ok ? "cgal" : "fairing failed";
   for (const auto v : verts) {
@@ -336,7 +336,7 @@ void time_rbf_solve(std::size_t n, std::mt19937& rng) {
       s2c::repair::fill::CubicRbf f;
       const auto t0 = Clock::now();
       ok &= f.fit(c, v, solver);
-      best = std::min(best, since(t0));
+      best = std::min(best, seconds_since(t0));
     }
     std::printf("| %5zu | %-13s | %9.2f |%s\n", n, solver == s2c::repair::fill::RbfSolver::lu ? "LU" : "null-space LLT",
                 1000 * best, ok ? "" : " (failed)");

@@ -26,10 +26,12 @@
 #include "s2c/repair/volumetric.h"
 #ifdef S2C_HAVE_OPENVDB
 #include "peers/openvdb_remesh.h"
+#include "s2c/core/clock.h"
 #endif
 
 namespace {
 
+using s2c::seconds_since;
 using s2c::TriangleSoup;
 using namespace s2c::repair;
 
@@ -109,10 +111,6 @@ double sharp_edge_error_deg(const TriangleSoup& out, const TriangleSoup& truth, 
   return errors[errors.size() / 2];
 }
 
-double seconds(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 int run_step() {
   std::printf("| staircase | voxel mm | ε scalar MC (linear) | ε VDF MC (vector) | ratio |\n|---|---|---|---|---|\n");
   for (bool rotated : {false, true}) {
@@ -149,7 +147,7 @@ int run_cad(const std::vector<std::string>& meshes, double div, double band) {
     VolumetricStats st;
     const auto t0 = std::chrono::steady_clock::now();
     const TriangleSoup ours = volumetric_remesh(in, o, &st);
-    const double t_ours = seconds(t0);
+    const double t_ours = seconds_since(t0);
     std::fprintf(stderr, "%s: field %.2f s, sign %.2f s, extract %.2f s\n", path.c_str(), st.seconds_field, st.seconds_sign, st.seconds_extract);
     const auto d_ours = s2c::bench::surface_distance(ours, in);
     const double mc_edge = sharp_edge_error_deg(ours, in, o.voxel);
@@ -186,7 +184,7 @@ int run_memory(const std::string& path, double div) {
   VolumetricStats st;
   const auto t0 = std::chrono::steady_clock::now();
   const TriangleSoup out = volumetric_remesh(in, o, &st);
-  const double t = seconds(t0);
+  const double t = seconds_since(t0);
   rusage ru{};
   getrusage(RUSAGE_SELF, &ru);
   std::printf("| %s | %.0f³ equivalent | voxel %.4f mm | %zu band vertices | grid %.1f MB | %.1f B/vertex | "

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include "s2c/core/clock.h"
 #include "s2c/core/errors.h"
 #include "s2c/core/files.h"
 #include "s2c/core/version.h"
@@ -224,7 +225,7 @@ RunResult run_pipeline(const RunOptions& o) {
       for (const auto& out : s.outputs) fs::remove(out);
       const auto t0 = std::chrono::steady_clock::now();
       sr.exit_code = spawn_and_wait(argv, s.stdout_to);
-      sr.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      sr.seconds = seconds_since(t0);
       entry["seconds"] = sr.seconds;
       entry["exit_code"] = sr.exit_code;
       const bool outputs_ok = std::all_of(s.outputs.begin(), s.outputs.end(), [](const fs::path& p) { return fs::exists(p); });

@@ -18,6 +18,7 @@
 #include <CGAL/alpha_wrap_3.h>
 #include <CGAL/Polygon_mesh_processing/IO/polygon_mesh_io.h>
 
+#include "s2c/core/clock.h"
 #include "s2c/core/errors.h"
 #include "s2c/core/io.h"
 
@@ -62,7 +63,7 @@ int main(int argc, char** argv) {
     Wrap wrap;
     const auto t0 = std::chrono::steady_clock::now();
     CGAL::alpha_wrap_3(points, faces, alpha, offset, wrap);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double seconds = s2c::seconds_since(t0);
 
     if (wrap.number_of_faces() == 0) throw s2c::ProcessingError("alpha_wrap_3 returned an empty wrap");
     // CGAL's writer (by extension; binary PLY/STL): the wrap is already a clean Surface_mesh.

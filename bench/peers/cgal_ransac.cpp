@@ -36,6 +36,7 @@
 #include <CGAL/property_map.h>
 
 #include "features_eval.h"
+#include "s2c/core/clock.h"
 #include "s2c/core/errors.h"
 #include "s2c/core/io.h"
 #include "s2c/features/analyze.h"
@@ -59,7 +60,6 @@ using RCylinder = CGAL::Shape_detection::Cylinder<Traits>;
 using RSphere = CGAL::Shape_detection::Sphere<Traits>;
 using RCone = CGAL::Shape_detection::Cone<Traits>;
 
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 Eigen::Vector3d eig(const Point& p) { return {p.x(), p.y(), p.z()}; }
 Eigen::Vector3d eig(const Vector& v) { return {v.x(), v.y(), v.z()}; }
 
@@ -87,7 +87,7 @@ RansacResult run_ransac(const Mesh& mesh, std::size_t n_samples, double sigma_mm
   const auto t0 = Clock::now();
   ransac.detect(defaults);
   RansacResult r;
-  r.seconds = since(t0);
+  r.seconds = seconds_since(t0);
   // The epsilons detect() derived (same formula, from the samples' bbox).
   Eigen::Vector3d lo = s.points[0], hi = s.points[0];
   for (const auto& p : s.points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
@@ -239,7 +239,7 @@ Row compare(const Mesh& mesh, const bench::Truth& truth, const features::Feature
   } else {
     const auto t0 = Clock::now();
     fs = features::analyze(mesh, features::FeatureOptions{}).features;
-    row.ours_s = since(t0);
+    row.ours_s = seconds_since(t0);
   }
   if (!skip_ours) row.ours = bench::evaluate(mesh, fs, truth, tol).primitives;
   const std::vector<int> labels = bench::label_faces(mesh, truth, tol);

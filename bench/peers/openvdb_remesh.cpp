@@ -6,6 +6,8 @@
 #include <openvdb/tools/MeshToVolume.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
+#include "s2c/core/clock.h"
+
 namespace s2c::bench {
 
 OpenVdbResult openvdb_remesh(const TriangleSoup& input, double voxel, double half_width) {
@@ -19,7 +21,7 @@ OpenVdbResult openvdb_remesh(const TriangleSoup& input, double voxel, double hal
   using Clock = std::chrono::steady_clock;
   auto t0 = Clock::now();
   auto grid = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*xform, points, tris, float(half_width));
-  r.seconds_to_volume = std::chrono::duration<double>(Clock::now() - t0).count();
+  r.seconds_to_volume = seconds_since(t0);
   r.active_voxels = grid->activeVoxelCount();
   r.bytes = grid->memUsage();
   t0 = Clock::now();
@@ -27,7 +29,7 @@ OpenVdbResult openvdb_remesh(const TriangleSoup& input, double voxel, double hal
   std::vector<openvdb::Vec3I> out_tris;
   std::vector<openvdb::Vec4I> out_quads;
   openvdb::tools::volumeToMesh(*grid, out_points, out_tris, out_quads, 0.0);
-  r.seconds_to_mesh = std::chrono::duration<double>(Clock::now() - t0).count();
+  r.seconds_to_mesh = seconds_since(t0);
   for (const auto& p : out_points) r.mesh.vertices.emplace_back(p.x(), p.y(), p.z());
   for (const auto& t : out_tris) r.mesh.faces.push_back({int(t[0]), int(t[1]), int(t[2])});
   for (const auto& q : out_quads) {

@@ -4,6 +4,8 @@
 
 #include <cstdio>
 
+#include "s2c/core/clock.h"
+
 namespace s2c {
 namespace {
 std::atomic<bool> g_enabled{true};
@@ -39,7 +41,7 @@ void Progress::draw(bool final) {
   const std::size_t d = std::min(done_.load(), total_);
   const double frac = static_cast<double>(d) / static_cast<double>(total_);
   const int width = 30, filled = static_cast<int>(frac * width);
-  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  const double secs = seconds_since(start_);
   std::string bar(static_cast<std::size_t>(filled), '#');
   bar.resize(width, '.');
   std::fprintf(stderr, "\r  %-12s [%s] %zu/%zu %5.1fs%s", label_.c_str(), bar.c_str(), d, total_, secs, final ? "\n" : "");

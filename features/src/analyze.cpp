@@ -14,6 +14,7 @@
 
 #include "lines.h"
 #include "mesh_arrays.h"
+#include "s2c/core/clock.h"
 #include "s2c/core/disjoint_sets.h"
 #include "s2c/core/errors.h"
 #include "segment.h"
@@ -23,8 +24,6 @@ namespace s2c::features {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 /// Relative noise below which a mesh counts as a clean tessellation: raw face normals are then
 /// trusted as they are (no filtering, plain flood fill).

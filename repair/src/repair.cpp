@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "s2c/core/clock.h"
 #include "s2c/core/errors.h"
 #include "s2c/core/progress.h"
 #include "s2c/repair/defects.h"
@@ -20,12 +21,11 @@ namespace s2c::repair {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 /// Adds the time since t0 to rep.seconds.key (steps can run more than once).
 void add_seconds(nlohmann::json& rep, const char* key, Clock::time_point t0) {
   auto& slot = rep["seconds"][key];
-  slot = (slot.is_number() ? slot.get<double>() : 0.0) + since(t0);
+  slot = (slot.is_number() ? slot.get<double>() : 0.0) + seconds_since(t0);
 }
 
 nlohmann::json clean_json(const CleanStats& c) {
@@ -112,7 +112,7 @@ CheckResult surface_repair(TriangleSoup& soup, const RepairOptions& o, nlohmann:
   auto t0 = Clock::now();
   const CleanStats c = clean(soup);
   rep["clean"] = clean_json(c);
-  rep["seconds"]["clean"] = since(t0);
+  rep["seconds"]["clean"] = seconds_since(t0);
   rep["holes"] = nlohmann::json::array();
   CheckResult check;
   for (int round = 0; round < 3; ++round) {
@@ -211,7 +211,7 @@ TriangleSoup volumetric_repair(const std::vector<const TriangleSoup*>& inputs, c
     }
   }
   if (have_fallback) out = std::move(fallback);
-  rep["seconds"]["volumetric"] = since(t0);
+  rep["seconds"]["volumetric"] = seconds_since(t0);
   t0 = Clock::now();
   const double voxel = rep["voxel_mm"].get<double>();
   if (o.decimate_tolerance_voxels > 0) {
@@ -261,7 +261,7 @@ TriangleSoup volumetric_repair(const std::vector<const TriangleSoup*>& inputs, c
     }
     rep["decimate"] = tries;
   }
-  rep["seconds"]["decimate"] = since(t0);
+  rep["seconds"]["decimate"] = seconds_since(t0);
   return out;
 }
 
@@ -284,7 +284,7 @@ RepairResult repair_mesh(const TriangleSoup& input, const RepairOptions& o) {
   const DefectReport before = find_defects(input);
   progress.advance();
   rep["defects_before"] = to_json(before);
-  rep["seconds"]["defects_before"] = since(t0);
+  rep["seconds"]["defects_before"] = seconds_since(t0);
   if (before.check.cad_ready && o.strategy != Strategy::volumetric) {
     res.mesh = input;
     res.path = "unchanged";
@@ -351,7 +351,7 @@ RepairResult repair_mesh(const TriangleSoup& input, const RepairOptions& o) {
   t0 = Clock::now();
   const DefectReport after = find_defects(res.mesh);
   rep["defects_after"] = to_json(after);
-  rep["seconds"]["defects_after"] = since(t0);
+  rep["seconds"]["defects_after"] = seconds_since(t0);
   rep["path"] = res.path;
   res.cad_ready = after.check.cad_ready;
   progress.finish();

@@ -17,6 +17,7 @@
 #include "fill/patch.h"
 #include "fill/patch_check.h"
 #include "fill/rbf.h"
+#include "s2c/core/clock.h"
 
 namespace s2c::repair {
 
@@ -381,7 +382,7 @@ std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& 
   std::vector<double> seconds(holes.size(), 0);
   const auto t_pair = std::chrono::steady_clock::now();
   const std::vector<Loop> loops = repair_pairing(soup, index, holes);
-  const double pair_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_pair).count();
+  const double pair_seconds = seconds_since(t_pair);
   // Per input hole: the loops it is the primary source of (normally exactly its own loop).
   std::vector<std::vector<const Loop*>> by_hole(holes.size());
   for (const Loop& l : loops) by_hole[static_cast<std::size_t>(l.sources.front())].push_back(&l);
@@ -407,7 +408,7 @@ std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& 
       r.choice += " | " + part.choice;
       if (!part.reason.empty()) r.reason += (r.reason.empty() ? "" : " | ") + part.reason;
     }
-    seconds[h] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    seconds[h] = seconds_since(t0);
   }
   for (const Loop& l : loops)
     for (std::size_t k = 1; k < l.sources.size(); ++k) {

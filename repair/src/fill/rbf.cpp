@@ -16,16 +16,9 @@
 #include <Eigen/QR>
 
 #include "fill/liepa.h"
+#include "s2c/core/clock.h"
 
 namespace s2c::repair::fill {
-namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-}  // namespace
-
 bool CubicRbf::fit(const std::vector<Eigen::Vector3d>& centers, const std::vector<double>& values, RbfSolver solver) {
   const int n = static_cast<int>(centers.size());
   if (n < 5 || values.size() != centers.size()) return false;

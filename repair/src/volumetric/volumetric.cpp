@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "s2c/core/clock.h"
 #include "s2c/core/distance.h"
 #include "s2c/core/errors.h"
 #include "volumetric/dual_contouring.h"
@@ -23,10 +24,6 @@ std::size_t open_edges(const TriangleSoup& s) {
   std::size_t open = 0;
   for (const auto& [e, n] : count) open += n == 1;
   return open;
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 }  // namespace

@@ -7,6 +7,8 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "s2c/core/clock.h"
+
 namespace s2c {
 
 class Report {
@@ -31,7 +33,7 @@ class Report {
   class Step {
    public:
     Step(Report& r, std::string name) : report_(r), name_(std::move(name)), start_(std::chrono::steady_clock::now()) {}
-    ~Step() { report_.add_time(name_, std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count()); }
+    ~Step() { report_.add_time(name_, seconds_since(start_)); }
     Step(const Step&) = delete;
     Step& operator=(const Step&) = delete;
 
