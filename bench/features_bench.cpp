@@ -159,25 +159,37 @@ std::vector<double> parse_list(const std::string& s) {
 }
 
 // ----------------------------------------------------------------------------- sweep
+/// The options sweep and inputs share: which parts, noise levels, refinement and seed.
+struct SweepOptions {
+  std::string dir;
+  std::vector<std::string> names;
+  std::vector<double> sigmas;
+  double div;
+  unsigned long long seed;
+
+  explicit SweepOptions(const Args& a)
+      : dir(a.get("--parts", default_parts())),
+        names(split(a.get("--names", "plate,shaft,bracket,pocket"), ',')),
+        sigmas(parse_list(a.get("--sigma", "0,0.1,0.2,0.3"))),
+        div(std::stod(a.get("--div", "100"))),
+        seed(std::stoull(a.get("--seed", "1"))) {}
+  std::vector<bench::SweepInput> inputs(const std::string& name) const {
+    return bench::sweep_inputs(dir + "/" + name + ".stl", sigmas, div, seed);
+  }
+};
+
 int cmd_sweep(const Args& a) {
-  const std::string dir = a.get("--parts", default_parts());
-  const auto names = split(a.get("--names", "plate,shaft,bracket,pocket"), ',');
-  const auto sigmas = parse_list(a.get("--sigma", "0,0.1,0.2,0.3"));
-  const double div = std::stod(a.get("--div", "100"));
-  const auto seed = std::stoull(a.get("--seed", "1"));
+  const SweepOptions o(a);
   print_header();
-  for (const auto& name : names) {
-    const bench::Truth truth = bench::read_truth(dir + "/" + name + ".truth.json");
-    for (auto& in : bench::sweep_inputs(dir + "/" + name + ".stl", sigmas, div, seed)) {
+  for (const auto& name : o.names) {
+    const bench::Truth truth = bench::read_truth(o.dir + "/" + name + ".truth.json");
+    for (auto& in : o.inputs(name)) {
       const Run r = run_analyze(in.mesh);
       bench::Tolerances tol;
       tol.line_tol_mm = in.line_tol_mm;
       const FeatureMetrics m = bench::evaluate(in.mesh, r.features, truth, tol);
-      char input[64], sigma[32];
-      if (in.input == "OpenSCAD")
-        std::snprintf(input, sizeof input, "OpenSCAD (clean CAD)");
-      else
-        std::snprintf(input, sizeof input, "refined h=%.3f", in.h);
+      const std::string input = bench::input_label(in);
+      char sigma[32];
       std::snprintf(sigma, sizeof sigma, "%.1f", in.sigma_rel);
       print_row(name, input, sigma, in.mesh.n_faces(), m, r.seconds);
       if (a.flags.count("--verbose")) print_details(name + " " + input + " σ/h " + sigma, m);
@@ -188,15 +200,11 @@ int cmd_sweep(const Args& a) {
 
 // ----------------------------------------------------------------------------- inputs
 int cmd_inputs(const Args& a) {
-  const std::string dir = a.get("--parts", default_parts());
-  const auto names = split(a.get("--names", "plate,shaft,bracket,pocket"), ',');
-  const auto sigmas = parse_list(a.get("--sigma", "0,0.1,0.2,0.3"));
-  const double div = std::stod(a.get("--div", "100"));
-  const auto seed = std::stoull(a.get("--seed", "1"));
+  const SweepOptions o(a);
   const std::string out = a.get("--out", "");
   std::printf("| part | input | σ/h | h (mm) | σ (mm) | vertices | faces | min angle p1 (°) | file |\n|---|---|---|---|---|---|---|---|---|\n");
-  for (const auto& name : names)
-    for (auto& in : bench::sweep_inputs(dir + "/" + name + ".stl", sigmas, div, seed)) {
+  for (const auto& name : o.names)
+    for (auto& in : o.inputs(name)) {
       std::vector<double> angles;
       for (auto f : in.mesh.faces()) {
         std::vector<Eigen::Vector3d> p;

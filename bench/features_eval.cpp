@@ -191,13 +191,6 @@ Shape parse_shape(const json& j, const std::string& where) {
   return s;
 }
 
-bool is_surface_shape(ShapeType t) {
-  return t == ShapeType::plane || t == ShapeType::cylinder || t == ShapeType::sphere || t == ShapeType::cone;
-}
-
-const std::array<const char*, 11> kKindNames = {"equal_length", "connected",     "collinear",   "parallel",
-                                                "concentric",   "coaxial",       "perpendicular", "fixed_angle",
-                                                "equal_angle",  "symmetric",     "equal_radius"};
 
 bool is_equivalence(ConstraintKind k) {
   return k == ConstraintKind::parallel || k == ConstraintKind::coaxial || k == ConstraintKind::concentric ||
@@ -647,7 +640,7 @@ struct TruthRefs {
 };
 
 std::string describe(ConstraintKind kind, const std::vector<std::string>& names) {
-  std::string s = std::string(kind_name(kind)) + "(";
+  std::string s = std::string(features::constraint_name(kind)) + "(";
   const std::size_t shown = names.size() > 8 ? 6 : names.size();
   for (std::size_t i = 0; i < shown; ++i) s += (i ? "," : "") + names[i];
   if (shown < names.size()) s += ",… " + std::to_string(names.size()) + " members";
@@ -768,8 +761,6 @@ ConstraintMetrics evaluate_constraints(const features::FeatureSet& fs, const std
 
 }  // namespace
 
-const char* kind_name(ConstraintKind kind) { return kKindNames.at(static_cast<std::size_t>(kind)); }
-
 double shape_distance(const Shape& s, const Vector3d& p) {
   const Vector3d d = unit_or_z(s.dir);
   switch (s.type) {
@@ -867,7 +858,7 @@ Truth read_truth(const fs::path& path) {
       f.id = text(arr[i], "id", w);
       if (!ids.insert(f.id).second) bad(w, "duplicate id \"" + f.id + "\"");
       f.shape = parse_shape(key(arr[i], "shape", w), w + ".shape");
-      if (is_surface_shape(f.shape.type) != surfaces) bad(w, "shape type not allowed here");
+      if (features::is_surface(f.shape.type) != surfaces) bad(w, "shape type not allowed here");
       f.inward = arr[i].value("inward", false);
       out.push_back(f);
     }
@@ -880,9 +871,11 @@ Truth read_truth(const fs::path& path) {
     const std::string w = where + ".constraints[" + std::to_string(i) + "]";
     TruthConstraint c;
     const std::string kind = text(cons[i], "kind", w);
-    const auto k = std::find(kKindNames.begin(), kKindNames.end(), kind);
-    if (k == kKindNames.end()) bad(w + ".kind", "unknown constraint kind \"" + kind + "\"");
-    c.kind = static_cast<ConstraintKind>(k - kKindNames.begin());
+    try {
+      c.kind = features::constraint_kind(kind);
+    } catch (const InvalidInput&) {
+      bad(w + ".kind", "unknown constraint kind \"" + kind + "\"");
+    }
     const json& mem = key(cons[i], "members", w);
     if (!mem.is_array() || mem.size() < 2) bad(w + ".members", "not an array of at least 2 ids");
     for (const auto& x : mem) {
@@ -1202,6 +1195,13 @@ void add_noise(Mesh& mesh, double sigma, std::uint64_t seed) {
     mesh.set_point(v, p);
   }
   mesh.update_normals();
+}
+
+std::string input_label(const SweepInput& in) {
+  if (in.input == "OpenSCAD") return "OpenSCAD (clean CAD)";
+  char label[64];
+  std::snprintf(label, sizeof label, "refined h=%.3f", in.h);
+  return label;
 }
 
 std::vector<SweepInput> sweep_inputs(const fs::path& stl, const std::vector<double>& sigmas, double div,

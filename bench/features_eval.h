@@ -5,7 +5,8 @@
 // CGAL Efficient RANSAC peer, so that both are measured by the same code on the same meshes.
 //
 // The evaluation never calls the features stage's own geometry (shape.h's distance/fit): the
-// ground truth must not share code with what it judges. It uses the stage's value types only.
+// ground truth must not share code with what it judges. It uses the stage's value types, their
+// names (constraint_name / constraint_kind) and is_surface only.
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -172,6 +173,9 @@ struct SweepInput {
   Mesh mesh;                ///< normals updated
 };
 
+/// The input column of the tables: "OpenSCAD (clean CAD)" or "refined h=0.463".
+std::string input_label(const SweepInput& in);
+
 /// The sweep's inputs of one part: the OpenSCAD mesh itself (σ = 0), then the refined mesh
 /// (max edge = diagonal / div) with noise σ·h for each sigma (seed + index). The line tolerance
 /// is max(0.5 mm, 1.5·h) for refined inputs, 0.5 mm for the OpenSCAD mesh.
@@ -202,8 +206,5 @@ class PointGrid {
   double cell_;
   std::unordered_map<std::uint64_t, std::vector<int>> cells_;
 };
-
-/// "parallel", … (the names of features.json), without needing the features library's code.
-const char* kind_name(features::ConstraintKind kind);
 
 }  // namespace s2c::bench

@@ -313,11 +313,8 @@ int main(int argc, char** argv) {
         for (const auto& in : bench::sweep_inputs(dir + "/" + name + ".stl", sigmas, div, seed)) {
           Row row = compare(in.mesh, truth, nullptr, in.sigma_mm, samples, in.line_tol_mm, runs);
           row.part = name;
-          char buf[64];
-          if (in.input == "OpenSCAD")
-            row.input = "OpenSCAD (clean CAD)";
-          else
-            std::snprintf(buf, sizeof buf, "refined h=%.3f", in.h), row.input = buf;
+          row.input = bench::input_label(in);
+          char buf[32];
           std::snprintf(buf, sizeof buf, "%.1f", in.sigma_rel);
           row.sigma = buf;
           print_row(row);

@@ -153,6 +153,21 @@ std::vector<std::vector<int>> classes(const std::vector<int>& items, Same same) 
   return out;
 }
 
+/// Position of each item's class in `cls`.
+std::map<int, int> class_index(const std::vector<std::vector<int>>& cls) {
+  std::map<int, int> index;
+  for (std::size_t c = 0; c < cls.size(); ++c)
+    for (int i : cls[c]) index[i] = static_cast<int>(c);
+  return index;
+}
+
+/// How many distinct classes (by `index`) the members of `c` fall in.
+std::size_t distinct_classes(const std::vector<int>& c, const std::map<int, int>& index) {
+  std::set<int> distinct;
+  for (int i : c) distinct.insert(index.at(i));
+  return distinct.size();
+}
+
 struct Found {
   ConstraintKind kind;
   std::vector<int> members;  ///< feature indices (equal_angle: positions in the sorted fixed_angle list)
@@ -179,21 +194,21 @@ class Detector {
     line_.assign(n, nullptr);
     nbr_.resize(n);
     std::unordered_map<std::string, int> index;
-    std::vector<char> small(np_, 0);
+    std::vector<char> doubtful(np_, 0);  // patches whose lines take no part either
     for (int i = 0; i < np_; ++i) {
       shape_[i] = usable(f.patches[i].shape);
-      if (shape_[i] && !is_surface_type(shape_[i]->type)) shape_[i].reset();
+      if (shape_[i] && !is_surface(shape_[i]->type)) shape_[i].reset();
       if (f.patches[i].area < o.min_patch_area) shape_[i].reset();
       // With a minimum area (noisy meshes), a patch without a usable shape disqualifies its lines
       // just like a small one: its borders are where fitting gave up, not CAD edges.
-      small[i] = o.min_patch_area > 0 && !shape_[i];
+      doubtful[i] = o.min_patch_area > 0 && !shape_[i];
       area_[i] = f.patches[i].area;
       index.emplace(f.patches[i].id, i);
     }
     for (int l = 0; l < static_cast<int>(f.lines.size()); ++l) {
       const int i = np_ + l;
       shape_[i] = usable(f.lines[l].shape);
-      if (shape_[i] && is_surface_type(shape_[i]->type)) shape_[i].reset();
+      if (shape_[i] && is_surface(shape_[i]->type)) shape_[i].reset();
       line_[i] = &f.lines[l];
       index.emplace(f.lines[l].id, i);
     }
@@ -206,7 +221,7 @@ class Detector {
     adjacent_.assign(pairs.begin(), pairs.end());
     // A line touching such a patch is as doubtful as the patch.
     for (auto [a, b] : adjacent_)
-      if (a < np_ && b >= np_ && small[a]) shape_[b].reset();
+      if (a < np_ && b >= np_ && doubtful[a]) shape_[b].reset();
     for (auto [a, b] : adjacent_) {
       nbr_[a].push_back(b);
       nbr_[b].push_back(a);
@@ -233,9 +248,6 @@ class Detector {
   }
 
  private:
-  static bool is_surface_type(ShapeType t) {
-    return t == ShapeType::plane || t == ShapeType::cylinder || t == ShapeType::sphere || t == ShapeType::cone;
-  }
   ShapeType type(int i) const { return shape_[i] ? shape_[i]->type : ShapeType::freeform; }
   const Shape& s(int i) const { return *shape_[i]; }
   bool parallel(const Vector3d& a, const Vector3d& b) const { return std::abs(a.dot(b)) >= cos_tol_; }
@@ -304,8 +316,7 @@ class Detector {
   void planes() {
     plane_classes_ = classes(planes_, [&](int a, int b) { return parallel(s(a).dir, s(b).dir); });
     add_classes(ConstraintKind::parallel, plane_classes_);
-    for (std::size_t c = 0; c < plane_classes_.size(); ++c)
-      for (int i : plane_classes_[c]) plane_class_[i] = static_cast<int>(c);
+    plane_class_ = class_index(plane_classes_);
     for (auto [a, b] : adjacent_)
       if (type(a) == ShapeType::plane && type(b) == ShapeType::plane && perpendicular(s(a).dir, s(b).dir))
         add(ConstraintKind::perpendicular, {a, b});
@@ -322,16 +333,11 @@ class Detector {
       if (count == 1) lines_of[on].push_back(sp);
     }
     add_classes(ConstraintKind::coaxial, lines_of);
-    std::map<int, int> line_of;
-    for (std::size_t c = 0; c < lines_of.size(); ++c)
-      for (int i : lines_of[c]) line_of[i] = static_cast<int>(c);
+    const std::map<int, int> line_of = class_index(lines_of);
 
     const auto dirs = classes(axes_, [&](int a, int b) { return parallel(s(a).dir, s(b).dir); });
-    for (const auto& c : dirs) {
-      std::set<int> distinct;
-      for (int i : c) distinct.insert(line_of[i]);
-      if (distinct.size() >= 2) add(ConstraintKind::parallel, c);
-    }
+    for (const auto& c : dirs)
+      if (distinct_classes(c, line_of) >= 2) add(ConstraintKind::parallel, c);
     std::set<std::pair<int, int>> perp;
     for (auto [a, b] : adjacent_)
       if ((type(a) == ShapeType::cylinder || type(a) == ShapeType::cone) &&
@@ -366,14 +372,10 @@ class Detector {
     }
     const auto on_line = classes(straight_, [&](int a, int b) { return collinear(a, b); });
     add_classes(ConstraintKind::collinear, on_line);
-    std::map<int, int> line_of;
-    for (std::size_t c = 0; c < on_line.size(); ++c)
-      for (int i : on_line[c]) line_of[i] = static_cast<int>(c);
+    const std::map<int, int> line_of = class_index(on_line);
     const auto dirs = classes(straight_, [&](int a, int b) { return parallel(s(a).dir, s(b).dir); });
     for (const auto& c : dirs) {
-      std::set<int> distinct;
-      for (int i : c) distinct.insert(line_of[i]);
-      if (distinct.size() < 2) continue;
+      if (distinct_classes(c, line_of) < 2) continue;
       std::set<std::pair<int, int>> common = keys[c.front()];
       for (int i : c) {
         std::set<std::pair<int, int>> both;
@@ -475,7 +477,7 @@ class Detector {
 
   void fixed_angles() {
     for (auto [a, b] : adjacent_) {
-      if (!shape_[a] || !shape_[b] || !is_surface_type(type(a)) || !is_surface_type(type(b))) continue;
+      if (!shape_[a] || !shape_[b] || !is_surface(type(a)) || !is_surface(type(b))) continue;
       const std::optional<double> angle = surface_angle(a, b);
       if (!angle || *angle <= o_.angle_tol_deg || *angle >= 90.0 - o_.angle_tol_deg) continue;
       add(ConstraintKind::fixed_angle, {a, b}, std::round(*angle * 10.0) / 10.0);

@@ -47,16 +47,48 @@ struct CircleModel {
   }
 };
 
-/// The point of the circle (centre, unit normal, radius) nearest to p.
+}  // namespace
+
+namespace fit {
+
+Shape clipped_line(const Vector3d& point, const Vector3d& dir, const std::vector<Vector3d>& pts) {
+  const Vector3d a = point + dir * dir.dot(pts.front() - point);
+  const Vector3d b = point + dir * dir.dot(pts.back() - point);
+  Shape s;
+  s.type = ShapeType::line;
+  s.point = a;
+  s.length = (b - a).norm();
+  s.dir = s.length > 0 ? Vector3d((b - a) / s.length) : dir;
+  return s;
+}
+
 Vector3d onto_circle(const Shape& circle, const Vector3d& p) {
   Vector3d v = p - circle.point;
   v -= circle.dir * circle.dir.dot(v);
   const double len = v.norm();
-  v = len > 0 ? Vector3d(v / len) : Vector3d(fit::perpendicular_frame(circle.dir).col(0));
+  v = len > 0 ? Vector3d(v / len) : Vector3d(perpendicular_frame(circle.dir).col(0));
   return circle.point + circle.radius * v;
 }
 
-}  // namespace
+void circle_or_arc(Shape& circle, const std::vector<Vector3d>& pts, bool closed, bool orient) {
+  double swept = 0;
+  for (std::size_t i = 1; i < pts.size(); ++i) {
+    const Vector3d a = pts[i - 1] - circle.point, b = pts[i] - circle.point;
+    swept += std::atan2(circle.dir.dot(a.cross(b)), a.dot(b));
+  }
+  if (orient && swept < 0) circle.dir = -circle.dir;
+  const double swept_deg = std::abs(swept) * 180.0 / M_PI;
+  if (closed || swept_deg >= 350.0) {
+    circle.type = ShapeType::circle;
+    return;
+  }
+  circle.type = ShapeType::arc;
+  circle.start = onto_circle(circle, pts.front());
+  circle.end = onto_circle(circle, pts.back());
+  circle.angle_deg = swept_deg;
+}
+
+}  // namespace fit
 
 Fit fit_line(const Samples& s) {
   Fit out;
@@ -65,12 +97,7 @@ Fit fit_line(const Samples& s) {
   if (!fit::normalize(s, 2, ns)) return out;
   // PCA is the exact orthogonal least-squares line: nothing left to refine.
   const fit::Pca pc = fit::pca(s.points, s.weights);
-  const Vector3d d = pc.vectors.col(2);
-  const Vector3d a = pc.mean + d * d.dot(s.points.front() - pc.mean);
-  const Vector3d b = pc.mean + d * d.dot(s.points.back() - pc.mean);
-  out.shape.point = a;
-  out.shape.length = (b - a).norm();
-  out.shape.dir = out.shape.length > 0 ? Vector3d((b - a) / out.shape.length) : d;
+  out.shape = fit::clipped_line(pc.mean, pc.vectors.col(2), s.points);
   fit::finish(out, s);
   return out;
 }
@@ -96,26 +123,8 @@ Fit fit_circle(const Samples& s, bool closed) {
   sh.point = ns.to_world(m.c);
   sh.dir = m.n.normalized();
   sh.radius = m.r * ns.scale;
-  // Swept angle walking through the ordered samples; the normal is turned so the walk is
-  // counter-clockwise about it (positive sweep).
-  double swept = 0;
-  for (std::size_t i = 1; i < s.points.size(); ++i) {
-    const Vector3d a = s.points[i - 1] - sh.point, b = s.points[i] - sh.point;
-    swept += std::atan2(sh.dir.dot(a.cross(b)), a.dot(b));
-  }
-  if (swept < 0) {
-    sh.dir = -sh.dir;
-    swept = -swept;
-  }
-  const double swept_deg = swept * 180.0 / M_PI;
-  if (closed || swept_deg >= 350.0) {
-    sh.type = ShapeType::circle;
-  } else {
-    sh.type = ShapeType::arc;
-    sh.start = onto_circle(sh, s.points.front());
-    sh.end = onto_circle(sh, s.points.back());
-    sh.angle_deg = swept_deg;
-  }
+  // The normal is turned so the walk through the ordered samples is counter-clockwise about it.
+  fit::circle_or_arc(sh, s.points, closed, true);
   fit::finish(out, s);
   return out;
 }

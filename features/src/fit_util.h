@@ -56,6 +56,18 @@ Eigen::Matrix<double, 3, 2> perpendicular_frame(const Eigen::Vector3d& a);
 bool kasa_circle(const std::vector<Eigen::Vector2d>& q, const std::vector<double>& w, Eigen::Vector2d& center,
                  double& radius);
 
+/// The straight line through `point` along the unit `dir`, clipped to the projections of the first
+/// and last of the ordered points.
+Shape clipped_line(const Eigen::Vector3d& point, const Eigen::Vector3d& dir, const std::vector<Eigen::Vector3d>& pts);
+
+/// The point of the circle (centre, unit normal, radius) nearest to p.
+Eigen::Vector3d onto_circle(const Shape& circle, const Eigen::Vector3d& p);
+
+/// Types `circle` (centre, unit normal and radius set) by the angle the ordered points sweep
+/// around it: a circle when the chain is closed or sweeps ≥ 350°, otherwise an arc from the first
+/// to the last point. `orient` turns the normal so the sweep is counter-clockwise about it.
+void circle_or_arc(Shape& circle, const std::vector<Eigen::Vector3d>& pts, bool closed, bool orient);
+
 /// Fills rms, max_error, normal_rms_deg over all samples of `s` (weighted) and sets ok when the
 /// shape and the metrics are finite. Normal angles are unsigned (a hole's inward normals agree).
 void finish(Fit& f, const Samples& s);

@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
+
+#include "fit_util.h"
 
 namespace s2c::features {
 namespace {
@@ -12,60 +13,6 @@ Eigen::Vector3d oriented_normal(const Region& r, const Eigen::Vector3d& p, const
   Eigen::Vector3d n = surface_normal(r.fit.shape, p);
   if (n.squaredNorm() == 0) return face_normal;
   return n.dot(face_normal) < 0 ? Eigen::Vector3d(-n) : n;
-}
-
-double rms_distance(const Shape& s, const std::vector<Eigen::Vector3d>& pts, double* max_error) {
-  double sum = 0, worst = 0;
-  for (const auto& p : pts) {
-    const double d = distance(s, p);
-    sum += d * d;
-    worst = std::max(worst, d);
-  }
-  if (max_error) *max_error = worst;
-  return pts.empty() ? 0.0 : std::sqrt(sum / pts.size());
-}
-
-/// Straight line between the first and last point's projections onto the line (point, dir).
-Shape clipped_line(const Eigen::Vector3d& point, const Eigen::Vector3d& dir, const std::vector<Eigen::Vector3d>& pts) {
-  const Eigen::Vector3d a = point + dir * dir.dot(pts.front() - point);
-  const Eigen::Vector3d b = point + dir * dir.dot(pts.back() - point);
-  Shape s;
-  s.type = ShapeType::line;
-  s.point = a;
-  s.length = (b - a).norm();
-  s.dir = s.length > 0 ? Eigen::Vector3d((b - a) / s.length) : dir;
-  return s;
-}
-
-/// A circle (closed chain) or arc (open chain) with the given centre, normal and radius, swept
-/// through the ordered points.
-Shape circle_through(const Eigen::Vector3d& center, const Eigen::Vector3d& normal, double radius,
-                     const std::vector<Eigen::Vector3d>& pts, bool closed) {
-  Shape s;
-  s.point = center;
-  s.dir = normal.normalized();
-  s.radius = radius;
-  auto project = [&](const Eigen::Vector3d& p) {
-    Eigen::Vector3d d = p - center;
-    d -= s.dir * s.dir.dot(d);
-    const double len = d.norm();
-    return len > 0 ? Eigen::Vector3d(center + radius * d / len) : center;
-  };
-  double swept = 0;
-  for (std::size_t i = 1; i < pts.size(); ++i) {
-    const Eigen::Vector3d a = pts[i - 1] - center, b = pts[i] - center;
-    swept += std::atan2(s.dir.dot(a.cross(b)), a.dot(b));
-  }
-  const double angle = std::abs(swept) * 180.0 / M_PI;
-  if (closed || angle >= 350.0) {
-    s.type = ShapeType::circle;
-    return s;
-  }
-  s.type = ShapeType::arc;
-  s.start = project(pts.front());
-  s.end = project(pts.back());
-  s.angle_deg = angle;
-  return s;
 }
 
 /// The intersection curve of the two patches' shapes, when it is a line or a circle.
@@ -87,7 +34,7 @@ bool intersection_curve(const Shape& a, const Shape& b, const std::vector<Eigen:
     A.row(1) = other->dir.transpose();
     A.row(2) = dir.normalized().transpose();
     const Eigen::Vector3d rhs(n.dot(plane->point), other->dir.dot(other->point), dir.normalized().dot(c));
-    out = clipped_line(A.colPivHouseholderQr().solve(rhs), dir.normalized(), pts);
+    out = fit::clipped_line(A.colPivHouseholderQr().solve(rhs), dir.normalized(), pts);
     return true;
   }
   if (other->type != ShapeType::cylinder && other->type != ShapeType::cone) return false;
@@ -98,7 +45,11 @@ bool intersection_curve(const Shape& a, const Shape& b, const std::vector<Eigen:
   const double radius =
       other->type == ShapeType::cylinder ? other->radius : std::abs(t) * std::tan(other->half_angle_deg * M_PI / 180.0);
   if (!(radius > 0)) return false;
-  out = circle_through(center, n, radius, pts, closed);
+  out = Shape{};
+  out.point = center;
+  out.dir = n.normalized();
+  out.radius = radius;
+  fit::circle_or_arc(out, pts, closed, false);
   return true;
 }
 
@@ -160,30 +111,26 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const std::vector<Eigen
   for (int e = 0; e < ne; ++e)  // closed loops without junctions (a hole's rim)
     if (pair[e].first != -2 && !used[e]) walk(m.edges[e].v0, e);
 
+  // A chain of mesh edges along a worn crease zigzags by up to half an edge on top of the noise.
+  const double line_tol =
+      noisy ? std::hypot(tolerance, 0.5 * m.median_edge) : std::max(tolerance, 0.25 * m.median_edge);
   for (auto& line : lines) {
-    std::vector<Eigen::Vector3d> pts;
-    for (int v : line.vertices) pts.push_back(m.pos[v]);
+    Samples s;
+    for (int v : line.vertices) s.points.push_back(m.pos[v]);
+    const std::vector<Eigen::Vector3d>& pts = s.points;
     Fit& fit = line.fit;
     fit.shape.type = ShapeType::freeform;
     if (pts.size() < 2) continue;
-    // A chain of mesh edges along a worn crease zigzags by up to half an edge on top of the noise.
-    const double line_tol = noisy ? std::hypot(tolerance, 0.5 * m.median_edge) : std::max(tolerance, 0.25 * m.median_edge);
-    Shape exact;
+    Fit exact;
     if (line.region_b >= 0 &&
         intersection_curve(seg.regions[line.region_a].fit.shape, seg.regions[line.region_b].fit.shape, pts,
-                           line.closed, exact)) {
-      double worst = 0;
-      const double rms = rms_distance(exact, pts, &worst);
-      if (rms <= line_tol) {
-        fit.shape = exact;
-        fit.rms = rms;
-        fit.max_error = worst;
-        fit.ok = true;
+                           line.closed, exact.shape)) {
+      fit::finish(exact, s);
+      if (exact.rms <= line_tol) {
+        fit = exact;
         continue;
       }
     }
-    Samples s;
-    s.points = pts;
     if (!line.closed) {
       Fit l = fit_line(s);
       if (l.ok && l.rms <= line_tol) {

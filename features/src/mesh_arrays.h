@@ -35,8 +35,8 @@ struct MeshArrays {
 /// Builds the arrays of a (manifold, as OpenMesh holds it) mesh. Deleted elements are not expected.
 MeshArrays build_arrays(const Mesh& mesh);
 
-/// Robust normal noise σ (mm): median absolute offset of vertices from the plane of their 1-ring,
-/// scaled to a standard deviation. Creases and corners are a minority and do not move the median.
+/// Robust normal noise σ (mm): over interior edges, the offset of one face's far vertex from the
+/// other face's plane; its lower quartile, scaled to a standard deviation, leaves creases out.
 double measure_noise(const MeshArrays& m);
 
 }  // namespace s2c::features

@@ -110,7 +110,6 @@ std::vector<Eigen::Vector3d> filter_normals(const MeshArrays& m, int iterations,
   constexpr int kGuidedIterations = 2;
   for (int it = 0; it < iterations; ++it) {
     const bool guided = it < kGuidedIterations;
-    const double sigma_now = sigma_r;
     tbb::parallel_for(tbb::blocked_range<int>(0, m.faces(), 512), [&](const tbb::blocked_range<int>& range) {
       std::vector<int> ring;
       for (int f = range.begin(); f < range.end(); ++f) {
@@ -129,7 +128,7 @@ std::vector<Eigen::Vector3d> filter_normals(const MeshArrays& m, int iterations,
         Eigen::Vector3d sum = Eigen::Vector3d::Zero();
         auto add = [&](int g) {
           const double ds = (m.centroid[f] - m.centroid[g]).norm() / sigma_s;
-          const double dr = (guide - n[g]).norm() / sigma_now;
+          const double dr = (guide - n[g]).norm() / sigma_r;
           sum += m.farea[g] * std::exp(-0.5 * (ds * ds + dr * dr)) * n[g];
         };
         add(f);
@@ -235,8 +234,9 @@ Fit choose_shape(const Samples& s, const SegmentParams& p) {
   // On a noisy mesh a narrow chamfer band fits a sphere zone better than its own cone: the
   // filtered normals blend into both neighbours at the band's creases and so turn across the
   // band as a sphere's do. A CAD part's narrow band between two creases is a chamfer far more
-  // often than a sphere zone, so the cone takes it unless it is clearly farther from the samples. (Not on clean
-  // tessellations: there each ring of a faceted sphere is exactly a cone band.)
+  // often than a sphere zone, so the cone takes it unless it is clearly farther from the
+  // samples. (Not on clean tessellations: there each ring of a faceted sphere is exactly a cone
+  // band.)
   const Fit& cone = candidates[2];
   if (p.noisy && chosen == &candidates[0] && usable(cone) && cone.rms <= kChamferPreference * chosen->rms &&
       narrow_zone(s, cone.shape, chosen->shape.radius))
@@ -387,6 +387,12 @@ void grow_regions(const MeshArrays& m, const std::vector<Eigen::Vector3d>& norma
   }
 }
 
+/// Points every face at the region holding it.
+void index_faces(Segmentation& seg) {
+  for (int r = 0; r < static_cast<int>(seg.regions.size()); ++r)
+    for (int f : seg.regions[r].faces) seg.face_region[f] = r;
+}
+
 /// Drops the regions for which `drop` is true and renumbers the rest; faces of dropped regions
 /// become unassigned (-1).
 template <class Drop>
@@ -428,8 +434,7 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
   }
   seg.seeds = seg.regions.size();
   seg.face_region.assign(nf, -1);
-  for (int r = 0; r < static_cast<int>(seg.regions.size()); ++r)
-    for (int f : seg.regions[r].faces) seg.face_region[f] = r;
+  index_faces(seg);
   auto fit_region = [&](Region& r) {
     r.fit = choose_shape(region_samples(m, normals, r.faces), p);
     r.area = area_of(m, r.faces);
@@ -465,8 +470,7 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
       --seg.splits;
     }
     seg.regions = std::move(all);
-    for (int r = 0; r < static_cast<int>(seg.regions.size()); ++r)
-      for (int f : seg.regions[r].faces) seg.face_region[f] = r;
+    index_faces(seg);
   }
 
   if (p.noisy) {
@@ -478,9 +482,6 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
              (r.fit.shape.type == ShapeType::freeform && r.faces.size() < kFreeformCrumbShare * nf);
     };
     const std::size_t before = seg.regions.size();
-    for (const auto& r : seg.regions)
-      if (crumb(r))
-        for (int f : r.faces) seg.face_region[f] = -1;
     drop_regions(seg, crumb);
     if (seg.regions.size() < before) {
       grow_regions(m, normals, p, seg);

@@ -1,8 +1,9 @@
 #pragma once
 // Feature patches: faces flood-filled inside sharp edges, fitted with plane / sphere / cylinder /
-// cone, neighbours with the same primitive merged. On noisy meshes the flood fill starts from
-// seed faces away from creases (tensor voting says which) and the crease band is then grown
-// into the patch whose fitted shape explains each face best.
+// cone, regions no primitive fits split by fit-driven region growing, neighbours with the same
+// primitive merged. On noisy meshes the flood fill stops at a stricter turn of the filtered
+// normals, the faces left out are grown into the patch whose shape explains each face best, and
+// crumbs are absorbed into their neighbours.
 #include <vector>
 
 #include "mesh_arrays.h"
