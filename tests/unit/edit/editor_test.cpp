@@ -1,0 +1,246 @@
+// Edits on the fixture parts, each verified by refitting the truth surfaces' vertices after the
+// edit (independently of the features the edit updated), plus locality, rollback and CAD-readiness.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "edit_fixture.h"
+
+namespace s2c::test {
+namespace {
+
+using features::ShapeType;
+
+const EditPart& plate() {
+  static const EditPart p = load_edit_part("plate");
+  return p;
+}
+
+// The fixture meshes hold 6 significant digits (OpenSCAD's output): their vertices lie on the
+// truth surfaces to about 1e-5 mm. Comparisons with the truth use these bounds, far below the
+// issue's targets (0.05 mm, 0.1°, constraint residual 0.01° / 1e-3 mm).
+constexpr double kMm = 1e-4, kDeg = 1e-3;
+
+double axis_angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.normalized().cross(b.normalized()).norm(), std::abs(a.normalized().dot(b.normalized()))) * 180.0 / M_PI;
+}
+
+void expect_cad_ready(const Mesh& m) {
+  const CheckResult c = check(m);
+  EXPECT_TRUE(c.cad_ready) << (c.problems.empty() ? "" : c.problems.front());
+  EXPECT_EQ(c.self_intersections, 0u);
+  EXPECT_EQ(c.degenerate_faces, 0u);
+}
+
+TEST(Edit, PlateWidenOneHolePropagatesEqualRadius) {
+  const EditPart& p = plate();
+  edit::Editor ed = run_on(p,
+                           "let hole = select cylinder where radius ~ 3 +- 0.5 nearest [22, 12, 4]\n"
+                           "set hole.radius = 4\n"
+                           "assert hole.radius ~ 4 +- 0.001\n");
+  for (const char* id : {"hole_0", "hole_1", "hole_2", "hole_3"}) {
+    const auto vs = on_primitive(p, id);
+    const auto fit = refit(ed.mesh(), vs, ShapeType::cylinder);
+    ASSERT_TRUE(fit.ok) << id;
+    EXPECT_NEAR(fit.shape.radius, 4.0, kMm) << id;  // target: within 0.05 mm
+    EXPECT_LT(fit.rms, kMm) << id;
+    const auto& truth = truth_primitive(p, id).shape;
+    EXPECT_LT(axis_angle_deg(fit.shape.dir, truth.dir), kDeg) << id;
+    const Eigen::Vector3d d = fit.shape.point - truth.point;
+    EXPECT_LT((d - d.dot(truth.dir) * truth.dir).norm(), kMm) << id;
+  }
+  const auto centre = refit(ed.mesh(), on_primitive(p, "hole_center"), ShapeType::cylinder);
+  EXPECT_NEAR(centre.shape.radius, 6.0, kMm);
+  // The holes' 1-ring is top and bottom; the sides are the 2-ring: their vertices do not move.
+  for (const char* side : {"side_xp", "side_xn", "side_yp", "side_yn"})
+    for (int v : on_primitive(p, side)) EXPECT_EQ(displacement(p, ed.mesh(), v), 0.0) << side;
+  for (int v : on_primitive(p, "hole_center")) EXPECT_EQ(displacement(p, ed.mesh(), v), 0.0);
+  // The features follow: four cylinders of radius 4 in features().
+  int fours = 0;
+  for (const auto& patch : ed.features().patches)
+    if (patch.shape.type == ShapeType::cylinder && std::abs(patch.shape.radius - 4.0) < 1e-9) ++fours;
+  EXPECT_EQ(fours, 4);
+  expect_cad_ready(ed.mesh());
+}
+
+TEST(Edit, PlateUnconstrainedHoleChangesAlone) {
+  const EditPart& p = plate();
+  edit::Editor ed = run_on(p,
+                           "let hole = select cylinder where radius ~ 3 +- 0.5 nearest [22, 12, 4]\n"
+                           "unconstrain hole\n"
+                           "set hole.radius = 4.5\n");
+  EXPECT_NEAR(refit(ed.mesh(), on_primitive(p, "hole_2"), ShapeType::cylinder).shape.radius, 4.5, kMm);
+  for (const char* id : {"hole_0", "hole_1", "hole_3"})
+    for (int v : on_primitive(p, id)) EXPECT_EQ(displacement(p, ed.mesh(), v), 0.0) << id;
+  expect_cad_ready(ed.mesh());
+}
+
+TEST(Edit, PlateMoveTopKeepsItsNeighboursAndTheBottom) {
+  const EditPart& p = plate();
+  edit::Editor ed = run_on(p,
+                           "let top = select plane where normal ~ +z highest\n"
+                           "let bottom = select plane where normal ~ -z\n"
+                           "move top by [0, 0, 3]\n"
+                           "assert parallel(top, bottom)\n");
+  const auto top = refit(ed.mesh(), on_primitive(p, "top"), ShapeType::plane);
+  EXPECT_LT(axis_angle_deg(top.shape.dir, Eigen::Vector3d::UnitZ()), kDeg);
+  EXPECT_NEAR(top.shape.point.z(), 11.0, kMm);
+  for (int v : on_primitive(p, "bottom")) EXPECT_EQ(displacement(p, ed.mesh(), v), 0.0);
+  for (const char* id : {"hole_0", "hole_center"}) {
+    const auto fit = refit(ed.mesh(), on_primitive(p, id), ShapeType::cylinder);
+    EXPECT_NEAR(fit.shape.radius, truth_primitive(p, id).shape.radius, kMm) << id;
+  }
+  for (const char* side : {"side_xp", "side_yn"}) {
+    const auto fit = refit(ed.mesh(), on_primitive(p, side), ShapeType::plane);
+    EXPECT_LT(fit.rms, kMm) << side;
+    EXPECT_LT(axis_angle_deg(fit.shape.dir, truth_primitive(p, side).shape.dir), kDeg) << side;
+  }
+  EXPECT_NEAR(bounds(ed.mesh()).max.z(), 11.0, kMm);
+  expect_cad_ready(ed.mesh());
+}
+
+TEST(Edit, PlateRotateTopPropagatesParallelToBottom) {
+  const EditPart& p = plate();
+  edit::Editor ed(p.mesh, p.features);
+  const auto top = ed.select([&](edit::FeatureRef f) {
+    return ed.shape(f).type == ShapeType::plane && ed.shape(f).dir.z() > 0.99;
+  });
+  ASSERT_EQ(top.size(), 1u);
+  const edit::EditReport r = ed.rotate(top, {1, 0, 0}, 2.0);
+  ASSERT_FALSE(r.propagated.empty());
+  const auto t = refit(ed.mesh(), on_primitive(p, "top"), ShapeType::plane);
+  const auto b = refit(ed.mesh(), on_primitive(p, "bottom"), ShapeType::plane);
+  EXPECT_NEAR(axis_angle_deg(t.shape.dir, Eigen::Vector3d::UnitZ()), 2.0, kDeg);
+  EXPECT_LT(axis_angle_deg(t.shape.dir, b.shape.dir), 0.01);  // target: constraint residual ≤ 0.01°
+  expect_cad_ready(ed.mesh());
+}
+
+TEST(Edit, LockedFeatureMakesAConflictAndNothingChanges) {
+  const EditPart& p = plate();
+  edit::Editor ed(p.mesh, p.features);
+  const auto planes = [&](double z) {
+    return ed.select([&, z](edit::FeatureRef f) { return ed.shape(f).type == ShapeType::plane && ed.shape(f).dir.z() * z > 0.99; });
+  };
+  ed.lock(planes(-1).at(0));
+  try {
+    ed.rotate(planes(1), {1, 0, 0}, 2.0);
+    FAIL() << "no conflict";
+  } catch (const ProcessingError& e) {
+    EXPECT_NE(std::string(e.what()).find("locked"), std::string::npos) << e.what();
+  }
+  for (double d : ed.displacement()) ASSERT_EQ(d, 0.0);
+  EXPECT_EQ(ed.features().groups.size(), p.features.groups.size());
+}
+
+TEST(Edit, ShaftRadiusKeepsCoaxialAndEqualRadius) {
+  const EditPart p = load_edit_part("shaft");
+  edit::Editor ed = run_on(p,
+                           "let body = select cylinder largest\n"
+                           "set body.radius = 11\n");
+  const auto body = refit(ed.mesh(), on_primitive(p, "shaft_body"), ShapeType::cylinder);
+  EXPECT_NEAR(body.shape.radius, 11.0, kMm);
+  EXPECT_LT(axis_angle_deg(body.shape.dir, Eigen::Vector3d::UnitZ()), kDeg);
+  const auto tip = refit(ed.mesh(), on_primitive(p, "tip"), ShapeType::sphere);
+  EXPECT_NEAR(tip.shape.radius, 11.0, kMm);  // equal_radius propagated
+  EXPECT_LT((tip.shape.point - Eigen::Vector3d(0, 0, 40)).norm(), kMm);
+  for (int v : on_primitive(p, "end")) {
+    if (p.before[v].head<2>().norm() < 7.9) EXPECT_EQ(displacement(p, ed.mesh(), v), 0.0);
+  }
+  expect_cad_ready(ed.mesh());
+}
+
+TEST(Edit, PocketFloorMovesDownAndTheCounterboreFollows) {
+  const EditPart p = load_edit_part("pocket");
+  edit::Editor ed = run_on(p,
+                           "let floor = select plane where normal ~ +z and area < 500 largest\n"
+                           "move floor by [0, 0, -2]\n");
+  const auto floor = refit(ed.mesh(), on_primitive(p, "pocket_floor"), ShapeType::plane);
+  EXPECT_NEAR(floor.shape.point.z(), 10.0, kMm);
+  for (int v : on_primitive(p, "top")) EXPECT_EQ(displacement(p, ed.mesh(), v), 0.0);
+  for (int v : on_primitive(p, "bottom")) EXPECT_EQ(displacement(p, ed.mesh(), v), 0.0);
+  const auto cb = refit(ed.mesh(), on_primitive(p, "counterbore"), ShapeType::cylinder);
+  EXPECT_NEAR(cb.shape.radius, 6.0, kMm);
+  expect_cad_ready(ed.mesh());
+}
+
+TEST(Edit, ArapOnARefinedPlateKeepsPlanesAndReusesTheFactorisation) {
+  const EditPart p = load_edit_part("plate", 2.0);
+  edit::Editor ed(p.mesh, p.features);
+  const auto top = ed.select([&](edit::FeatureRef f) { return ed.shape(f).type == ShapeType::plane && ed.shape(f).dir.z() > 0.99; });
+  ASSERT_EQ(top.size(), 1u);
+  const edit::EditReport r1 = ed.move(top, {0, 0, 1.5});
+  EXPECT_GT(r1.free_vertices, 0);
+  EXPECT_FALSE(r1.factorization_reused);
+  const edit::EditReport r2 = ed.move(top, {0, 0, 0.5});
+  EXPECT_TRUE(r2.factorization_reused);
+  for (const char* side : {"side_xp", "side_yn"}) {
+    const auto fit = refit(ed.mesh(), on_primitive(p, side), ShapeType::plane);
+    EXPECT_LT(fit.rms, kMm) << side;
+    EXPECT_LT(axis_angle_deg(fit.shape.dir, truth_primitive(p, side).shape.dir), kDeg) << side;
+  }
+  EXPECT_NEAR(refit(ed.mesh(), on_primitive(p, "top"), ShapeType::plane).shape.point.z(), 10.0, kMm);
+  for (int v : on_primitive(p, "bottom")) EXPECT_EQ(displacement(p, ed.mesh(), v), 0.0);
+  expect_cad_ready(ed.mesh());
+}
+
+TEST(Edit, LowLevelVertexEditBubblesIntoItsPatchOnly) {
+  const EditPart p = load_edit_part("plate", 2.0);
+  edit::Editor ed(p.mesh, p.features);
+  // An interior vertex of the top face, away from every hole and edge.
+  int pick = -1;
+  for (int v : on_primitive(p, "top"))
+    if (std::abs(p.before[v].x()) < 8 && std::abs(p.before[v].y() - 12) < 4 && std::abs(p.before[v].x()) > 1) {
+      pick = v;
+      break;
+    }
+  ASSERT_GE(pick, 0);
+  const auto top_vs = on_primitive(p, "top");
+  const edit::EditReport r = ed.move_vertices({pick}, {p.before[pick] + Eigen::Vector3d(0, 0, 0.3)});
+  EXPECT_EQ(r.free.size(), 1u);
+  EXPECT_NEAR(displacement(p, ed.mesh(), pick), 0.3, 1e-12);
+  const std::set<int> top_set(top_vs.begin(), top_vs.end());
+  int moved = 0;
+  for (int v = 0; v < static_cast<int>(p.before.size()); ++v) {
+    const double d = displacement(p, ed.mesh(), v);
+    if (!top_set.count(v)) EXPECT_EQ(d, 0.0) << v;
+    moved += d > 0.0;
+  }
+  EXPECT_GT(moved, 1);  // the patch around the vertex follows
+  expect_cad_ready(ed.mesh());
+}
+
+TEST(Edit, WholeMeshArapTouchesMoreThanTheRestrictedOne) {
+  const EditPart p = load_edit_part("plate", 2.0);
+  edit::EditOptions whole;
+  whole.whole_mesh = true;
+  edit::Editor a(p.mesh, p.features), b(p.mesh, p.features, whole);
+  auto pick = [&](edit::Editor& ed) {
+    return ed.select([&](edit::FeatureRef f) {
+      return ed.shape(f).type == ShapeType::cylinder && (ed.centroid(f) - Eigen::Vector3d(22, 12, 4)).norm() < 1;
+    });
+  };
+  edit::EditOptions o;
+  o.propagate = false;
+  const auto ra = a.set_radius(pick(a), 3.5);
+  const auto rb = b.set_radius(pick(b), 3.5);
+  EXPECT_GT(rb.free_vertices, ra.free_vertices);
+  EXPECT_GT(rb.free.size(), ra.free.size());
+}
+
+TEST(Edit, ConstrainMakesPlanesParallel) {
+  const EditPart& p = plate();
+  edit::Editor ed = run_on(p,
+                           "let top = select plane where normal ~ +z\n"
+                           "let bottom = select plane where normal ~ -z\n"
+                           "unconstrain parallel(top, bottom)\n"
+                           "rotate bottom about [0, 1, 0] by 1.5 deg\n"
+                           "constrain parallel(bottom, top)\n"
+                           "assert parallel(top, bottom)\n");
+  const auto t = refit(ed.mesh(), on_primitive(p, "top"), ShapeType::plane);
+  const auto b = refit(ed.mesh(), on_primitive(p, "bottom"), ShapeType::plane);
+  EXPECT_LT(axis_angle_deg(t.shape.dir, b.shape.dir), 0.01);
+  EXPECT_NEAR(axis_angle_deg(b.shape.dir, Eigen::Vector3d::UnitZ()), 1.5, kDeg);
+}
+
+}  // namespace
+}  // namespace s2c::test
