@@ -120,8 +120,8 @@ std::vector<Stage> plan(const RunOptions& o, InputKind kind, fs::path& final_mes
   if (!o.edit_script.empty() && !features.empty() &&
       add({"edit", "scan2cad-edit",
            {mesh.string(), "--features", features.string(), "--script", o.edit_script.string(), "-o",
-            (d / "edited.ply").string()},
-           {mesh, features, o.edit_script}, {d / "edited.ply"}, {}}))
+            (d / "edited.ply").string(), "--features-out", (d / "edited.features.json").string()},
+           {mesh, features, o.edit_script}, {d / "edited.ply", d / "edited.features.json"}, {}}))
     mesh = d / "edited.ply";
   if (!mesh.empty())
     add({"check", "scan2cad-check", {mesh.string(), "-o", (d / "check.json").string(), "--quiet"}, {mesh},

@@ -35,8 +35,33 @@ double cot(const Vector3d& a, const Vector3d& b) {
   return s > 0.0 ? a.dot(b) / s : 0.0;
 }
 
-// The closest rotation to the covariance S (Sorkine & Alexa: R = V Uᵀ, reflection removed).
+// The closest rotation to the covariance S (Sorkine & Alexa: R = V Uᵀ of S = U Σ Vᵀ, reflection
+// removed). Σ and V come from the closed-form eigen decomposition of SᵀS, U = S V Σ⁻¹ for the two
+// largest singular values and u₃ = ±u₁ × u₂; a cell of coplanar edges (rank 2, every interior
+// vertex of a plane) is handled exactly that way. Rank < 2 falls back to Jacobi SVD.
 Matrix3d closest_rotation(const Matrix3d& s) {
+  Eigen::SelfAdjointEigenSolver<Matrix3d> eig;
+  eig.computeDirect(s.transpose() * s);
+  const Eigen::Vector3d ev = eig.eigenvalues();  // ascending
+  const Matrix3d& v = eig.eigenvectors();
+  const double s1 = std::sqrt(std::max(ev(2), 0.0)), s2 = std::sqrt(std::max(ev(1), 0.0));
+  if (s1 > 0.0 && s2 > 1e-6 * s1) {
+    Matrix3d vv;
+    vv << v.col(2), v.col(1), v.col(0);  // descending singular values
+    Matrix3d u;
+    u.col(0) = (s * vv.col(0) / s1).normalized();
+    u.col(1) = s * vv.col(1) / s2;
+    u.col(1) = (u.col(1) - u.col(1).dot(u.col(0)) * u.col(0)).normalized();
+    u.col(2) = u.col(0).cross(u.col(1));
+    // S v₃ = σ₃ u₃ with σ₃ ≥ 0; the cross product may point the other way, which flips det(U).
+    if ((s * vv.col(2)).dot(u.col(2)) < 0.0) u.col(2) = -u.col(2);
+    Matrix3d r = vv * u.transpose();
+    if (r.determinant() < 0.0) {
+      u.col(2) = -u.col(2);
+      r = vv * u.transpose();
+    }
+    return r;
+  }
   Eigen::JacobiSVD<Matrix3d> svd(s, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Matrix3d u = svd.matrixU();
   Matrix3d r = svd.matrixV() * u.transpose();
@@ -132,7 +157,7 @@ ArapSolver::~ArapSolver() = default;
 const std::vector<int>& ArapSolver::unknowns() const { return impl_->unknowns; }
 const std::vector<std::array<int, 3>>& ArapSolver::faces() const { return impl_->faces; }
 
-ArapStats ArapSolver::solve(std::vector<Vector3d>& positions, int max_iterations, double tolerance) const {
+ArapStats ArapSolver::solve(std::vector<Vector3d>& positions, int max_iterations, double tolerance, bool warm) const {
   const Impl& m = *impl_;
   ArapStats stats;
   const int n = static_cast<int>(m.verts.size());
@@ -144,10 +169,10 @@ ArapStats ArapSolver::solve(std::vector<Vector3d>& positions, int max_iterations
   Eigen::MatrixXd rhs(u, 3), x(u, 3);
   double previous = -1.0;
   for (int it = 0; it < max_iterations; ++it) {
-    // Local step: the best rotation of every cell. The first iteration keeps R = I: the
-    // Laplacian solve spreads the handles' displacement smoothly, where the rotations of the
-    // undeformed interior against moved handles would start from folded cells.
-    if (it > 0) tbb::parallel_for(0, n, [&](int i) {
+    // Local step: the best rotation of every cell. From a cold start the first iteration keeps
+    // R = I: the Laplacian solve spreads the handles' displacement smoothly, where the rotations of
+    // the undeformed interior against moved handles would start from folded cells.
+    if (it > 0 || warm) tbb::parallel_for(0, n, [&](int i) {
       Matrix3d s = Matrix3d::Zero();
       for (int e = m.start[i]; e < m.start[i + 1]; ++e) {
         const int j = m.nbr[e];
@@ -167,7 +192,8 @@ ArapStats ArapSolver::solve(std::vector<Vector3d>& positions, int max_iterations
       }
       rhs.row(si) = b.transpose();
     });
-    x = m.ldlt.solve(rhs);
+    // The three coordinates are independent solves with one factorisation: one per core.
+    tbb::parallel_for(0, 3, [&](int c) { x.col(c) = m.ldlt.solve(rhs.col(c)); });
     for (int i = 0; i < n; ++i)
       if (m.unknown_slot[i] >= 0) p[i] = x.row(m.unknown_slot[i]).transpose();
     // Energy after the step (with the rotations of this iteration): for the stopping test.

@@ -28,8 +28,9 @@ class ArapSolver {
   ~ArapSolver();
 
   /// Solves for the unknowns given the constraint positions in `positions` (#V, global indices);
-  /// writes the unknowns into `positions`. Starts from the positions given.
-  ArapStats solve(std::vector<Eigen::Vector3d>& positions, int max_iterations, double tolerance) const;
+  /// writes the unknowns into `positions`. Starts from the positions given: `warm` when they are a
+  /// previous solution of this region (interactive dragging), else from the Laplacian solve.
+  ArapStats solve(std::vector<Eigen::Vector3d>& positions, int max_iterations, double tolerance, bool warm = false) const;
 
   const std::vector<int>& unknowns() const;
   const std::vector<std::array<int, 3>>& faces() const;

@@ -6,6 +6,8 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <limits>
+#include <queue>
 #include <map>
 #include <set>
 #include <unordered_map>
@@ -83,6 +85,7 @@ struct Editor::Impl {
   std::vector<std::array<int, 3>> faces;
   std::vector<std::vector<int>> patch_verts, line_verts;
   Incidence vertex_patches, vertex_lines;
+  std::vector<int> vv_start, vv;  // vertex → neighbouring vertices (compressed rows)
   std::vector<int> face_patch;
   std::map<std::string, FeatureRef> by_id;
   std::set<FeatureRef> locks;
@@ -224,22 +227,76 @@ struct Editor::Impl {
           if (!modified.count(fr) && !locks.count(fr)) free_set.insert(r);
         });
   }
-  // The unknowns: vertices of free patches that are not handles and touch only free patches.
+  // How far from a moved vertex the free region reaches: `influence` times half the size of the
+  // largest modified feature, and at least four times the largest displacement. A hole's
+  // neighbourhood then stays a disc around it however large the plane it sits in.
+  double influence_radius(const std::map<FeatureRef, Shape>& modified, const std::unordered_map<int, Vector3d>& target) const {
+    if (opt.influence <= 0.0 || opt.whole_mesh) return std::numeric_limits<double>::infinity();
+    double size = 0.0, moved = 0.0;
+    for (const auto& [f, s] : modified) {
+      Eigen::AlignedBox3d box;
+      for (int v : verts(f)) box.extend(original[v]);  // stable while a feature is dragged
+      if (!box.isEmpty()) size = std::max(size, box.diagonal().norm());
+    }
+    for (const auto& [v, p] : target) moved = std::max(moved, (p - pos[v]).norm());
+    if (size == 0.0) size = 2.0 * std::sqrt(total_area);  // vertex edits: the whole free patches
+    return std::max(opt.influence * 0.5 * size, 4.0 * moved);
+  }
+  // The unknowns: vertices of free patches that are not handles, touch only free patches and lie
+  // within `reach` of a moved vertex (graph distance along edges). `region_faces` receives the
+  // faces of free patches with an unknown corner (the ARAP energy) and `changed_faces` those with
+  // an unknown or a handle corner (the fold check).
   std::vector<int> region_unknowns(const std::set<int>& free_set, const std::unordered_map<int, Vector3d>& target,
-                                   std::vector<std::array<int, 3>>& region_faces) const {
+                                   double reach, std::vector<std::array<int, 3>>& region_faces,
+                                   std::vector<int>& changed_faces) const {
     std::vector<int> unknowns;
-    std::vector<char> seen(pos.size(), 0);
-    for (int q : free_set) {
-      for (int f : fs.patches[q].faces) region_faces.push_back(faces[f]);
+    std::vector<char> candidate(pos.size(), 0);
+    for (int q : free_set)
       for (int v : patch_verts[q]) {
-        if (seen[v] || target.count(v)) continue;
-        seen[v] = 1;
+        if (candidate[v] || target.count(v)) continue;
         bool all_free = true;
         vertex_patches.each(v, [&](int r) { all_free = all_free && free_set.count(r); });
-        if (all_free) unknowns.push_back(v);
+        if (all_free) candidate[v] = 1;
       }
+    if (std::isinf(reach)) {
+      for (int v = 0; v < static_cast<int>(pos.size()); ++v)
+        if (candidate[v]) unknowns.push_back(v);
+    } else {
+      // Multi-source Dijkstra from the moved vertices through candidates.
+      std::vector<double> dist(pos.size(), std::numeric_limits<double>::infinity());
+      using Item = std::pair<double, int>;
+      std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
+      for (const auto& [v, p] : target)
+        if ((p - pos[v]).squaredNorm() > 0.0) {
+          dist[v] = 0.0;
+          queue.push({0.0, v});
+        }
+      while (!queue.empty()) {
+        const auto [d, v] = queue.top();
+        queue.pop();
+        if (d > dist[v]) continue;
+        if (candidate[v]) unknowns.push_back(v);
+        for (int e = vv_start[v]; e < vv_start[v + 1]; ++e) {
+          const int w = vv[e];
+          if (!candidate[w]) continue;
+          const double dw = d + (original[w] - original[v]).norm();  // stable while dragging
+          if (dw <= reach && dw < dist[w]) {
+            dist[w] = dw;
+            queue.push({dw, w});
+          }
+        }
+      }
+      std::sort(unknowns.begin(), unknowns.end());
     }
-    std::sort(unknowns.begin(), unknowns.end());
+    std::vector<char> unknown(pos.size(), 0);
+    for (int v : unknowns) unknown[v] = 1;
+    for (int q : free_set)
+      for (int f : fs.patches[q].faces) {
+        const auto& t = faces[f];
+        const bool has_unknown = unknown[t[0]] || unknown[t[1]] || unknown[t[2]];
+        if (has_unknown) region_faces.push_back(t);
+        if (has_unknown || target.count(t[0]) || target.count(t[1]) || target.count(t[2])) changed_faces.push_back(f);
+      }
     return unknowns;
   }
   // Free analytic patches that were clean (a CAD tessellation) go back exactly onto the shape
@@ -329,6 +386,22 @@ Editor::Editor(Mesh mesh, features::FeatureSet fs, EditOptions options) : impl_(
   }
   m.vertex_patches.build(nv, m.patch_verts);
   m.vertex_lines.build(nv, m.line_verts);
+  {
+    std::vector<std::vector<int>> nb(nv);
+    for (const auto& t : m.faces)
+      for (int c = 0; c < 3; ++c) {
+        nb[t[c]].push_back(t[(c + 1) % 3]);
+        nb[t[c]].push_back(t[(c + 2) % 3]);
+      }
+    m.vv_start.assign(nv + 1, 0);
+    for (int v = 0; v < nv; ++v) {
+      std::sort(nb[v].begin(), nb[v].end());
+      nb[v].erase(std::unique(nb[v].begin(), nb[v].end()), nb[v].end());
+      m.vv_start[v + 1] = m.vv_start[v] + static_cast<int>(nb[v].size());
+    }
+    m.vv.reserve(m.vv_start[nv]);
+    for (const auto& n : nb) m.vv.insert(m.vv.end(), n.begin(), n.end());
+  }
   const Bounds b = bounds(m.mesh);
   m.diagonal = std::max(b.diagonal(), 1e-9);
   for (const auto& p : m.fs.patches) m.total_area += p.area;
@@ -573,24 +646,25 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
   // edited feature and a big fixed one cannot absorb the change), free the next ring and retry.
   std::vector<std::pair<int, Vector3d>> saved;
   std::vector<int> free_patches, unknowns;
+  double reach = influence_radius(new_shape, target);
   for (int ring = 0;; ++ring) {
     free_patches.assign(free_set.begin(), free_set.end());
     std::vector<std::array<int, 3>> region_faces;
-    unknowns = region_unknowns(free_set, target, region_faces);
-    saved.clear();
-    for (int v : handles) saved.emplace_back(v, pos[v]);
-    for (int v : unknowns) saved.emplace_back(v, pos[v]);
     std::vector<int> checked_faces;
     for (const auto& [f, s] : new_shape)
       if (f.kind == FeatureRef::Kind::patch)
         checked_faces.insert(checked_faces.end(), fs.patches[f.index].faces.begin(), fs.patches[f.index].faces.end());
-    for (int q : free_patches) checked_faces.insert(checked_faces.end(), fs.patches[q].faces.begin(), fs.patches[q].faces.end());
+    unknowns = region_unknowns(free_set, target, reach, region_faces, checked_faces);
+    saved.clear();
+    for (int v : handles) saved.emplace_back(v, pos[v]);
+    for (int v : unknowns) saved.emplace_back(v, pos[v]);
     std::vector<Vector3d> normals_before;
     normals_before.reserve(checked_faces.size());
     for (int f : checked_faces) normals_before.push_back(face_normal(pos, faces[f]));
 
     // The rest shape of a new solver is the mesh before this edit (handles not yet placed).
-    const bool reuse = !unknowns.empty() && cache.solver && cache.free_patches == free_patches && cache.handles == handles;
+    const bool reuse = !unknowns.empty() && cache.solver && cache.free_patches == free_patches &&
+                       cache.handles == handles && cache.solver->unknowns() == unknowns;
     if (!unknowns.empty() && !reuse) {
       cache.solver.reset();
       cache.solver = std::make_unique<ArapSolver>(pos, region_faces, unknowns);
@@ -600,7 +674,7 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
     for (const auto& [v, p] : target) pos[v] = p;
     if (!unknowns.empty()) {
       rep.factorization_reused = reuse;
-      rep.arap_iterations = cache.solver->solve(pos, opt.arap_iterations, opt.arap_tolerance).iterations;
+      rep.arap_iterations = cache.solver->solve(pos, opt.arap_iterations, opt.arap_tolerance, reuse).iterations;
       snap_clean_patches(free_patches, unknowns);
     }
     const int folded = first_folded(checked_faces, normals_before, turned);
@@ -610,8 +684,12 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
     }
     for (const auto& [v, p] : saved) pos[v] = p;  // roll back, then widen or give up
     const std::size_t before = free_set.size();
-    if (ring < opt.max_extra_rings) grow_ring(free_set, new_shape);
-    if (ring >= opt.max_extra_rings || free_set.size() == before)
+    const double reach_before = reach;
+    if (ring < opt.max_extra_rings) {
+      grow_ring(free_set, new_shape);
+      reach *= 2.0;
+    }
+    if (ring >= opt.max_extra_rings || (free_set.size() == before && reach == reach_before))
       throw ProcessingError(fmt::format(
           "the edit folds or collapses triangle {} of {} even with {} more ring(s) of neighbouring features free: the "
           "change is too large for the mesh around it (try a smaller change, or unconstrain / edit the neighbouring "

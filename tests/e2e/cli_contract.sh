@@ -69,6 +69,40 @@ if [[ -x "$bin/scan2cad-features" ]]; then
   python3 -c 'import json,sys; f=json.load(open(sys.argv[1])); assert f["format"]=="scan2cad.features/1"' \
     "$work/f.json" || fail "features on an open triangle wrote no valid features.json"
 fi
+if [[ -x "$bin/scan2cad-edit" ]]; then
+  "$bin/scan2cad" features "$src/fixtures/parts/plate.stl" -o "$work/plate.f.json" --quiet || fail "features of the plate"
+  plate="$src/fixtures/parts/plate.stl"; feats="$work/plate.f.json"
+  printf 'let h = select cylinder nearest [22, 12, 4]\nset h.radius = 3.5\nexport "%s"\n' "$work/exp.stl" > "$work/ok.s2e"
+  expect_rc 0 "edit a plate hole" "$bin/scan2cad" edit "$plate" --features "$feats" --script "$work/ok.s2e" \
+    -o "$work/e.ply" --features-out "$work/e.json"
+  [[ -s "$work/e.ply" && -s "$work/e.json" && -s "$work/exp.stl" ]] || fail "edit wrote not all of its outputs"
+  # The features written for the edited mesh belong to it: a second edit accepts them.
+  printf 'let h = select cylinder where radius ~ 3.5 +- 0.01\nassert h.count == 4\n' > "$work/again.s2e"
+  expect_rc 0 "edit the edited mesh with its features" "$bin/scan2cad" edit "$work/e.ply" --features "$work/e.json" \
+    --script "$work/again.s2e" --dry-run
+  rm -f "$work/e.ply" "$work/e.json" "$work/exp.stl"
+  expect_rc 2 "edit with features of another mesh" "$bin/scan2cad" edit "$src/fixtures/parts/pocket.stl" \
+    --features "$feats" --script "$work/ok.s2e" -o "$work/e.ply"
+  grep -q "sha256" "$work/stderr" || fail "edit's hash message does not say why"
+  printf 'let h = select cylinder nearest [22, 12, 4]\nmove h [0, 0, 1]\n' > "$work/syntax.s2e"
+  expect_rc 2 "edit script with a syntax error" "$bin/scan2cad" edit "$plate" --features "$feats" \
+    --script "$work/syntax.s2e" -o "$work/e.ply"
+  grep -q "syntax.s2e:2:8: expected 'by'" "$work/stderr" || fail "edit's syntax error names no line:column ($(cat "$work/stderr"))"
+  printf 'let h = select cylinder nearest [22, 12, 4]\nset h.radius = 3.5\nexport "%s"\nassert h.radius ~ 4 +- 0.05\n' \
+    "$work/exp.stl" > "$work/assert.s2e"
+  expect_rc 3 "edit script with a failing assert" "$bin/scan2cad" edit "$plate" --features "$feats" \
+    --script "$work/assert.s2e" -o "$work/e.ply" --features-out "$work/e.json"
+  grep -q "assert.s2e:4" "$work/stderr" || fail "edit's failed assert names no line"
+  [[ ! -e "$work/e.ply" && ! -e "$work/e.json" && ! -e "$work/exp.stl" ]] || fail "edit wrote output after a failed assert"
+  expect_rc 0 "edit --dry-run" "$bin/scan2cad" edit "$plate" --features "$feats" --script "$work/ok.s2e" --dry-run
+  grep -q "propagates" "$work/stdout" || fail "edit --dry-run does not say what propagates"
+  [[ ! -e "$work/exp.stl" ]] || fail "edit --dry-run wrote an export"
+  expect_rc 2 "edit --set of an unknown parameter" "$bin/scan2cad" edit "$plate" --features "$feats" \
+    --script "$work/ok.s2e" -o "$work/e.ply" --set nope=3
+  expect_rc 2 "edit onto its own input" "$bin/scan2cad" edit "$work/bad.off" --features "$feats" \
+    --script "$work/ok.s2e" -o "$work/bad.off"
+  [[ ! -e "$work/e.ply" ]] || fail "edit wrote output after bad input"
+fi
 expect_rc 2 "run on a missing input" "$bin/scan2cad" run "$work/nothing.stl" --out "$work/run_out"
 cmp -s "$work/bad.off" "$work/bad.copy" || fail "an input was modified"
 ls -a "$work" | grep -q "\.tmp-" && fail "a temporary file was left behind"

@@ -67,6 +67,38 @@ m = json.load(open(os.path.join(sys.argv[1], "manifest.json")))
 ran = [s["name"] for s in m["stages"] if s["status"] == "ok" and not s.get("skipped")]
 assert not ran, f"re-run should skip every stage, ran {ran}"
 PY
+# The edit stage on the repaired scan: the earlier stages are up to date, edit and check run.
+"$bin/scan2cad" run "$src/fixtures/scans/plate" --out "$work/out" --edit "$src/fixtures/edits/plate_widen_holes.s2e" \
+  --quiet || fail "run --edit exited $?"
+for f in edited.ply edited.features.json reports/edit.json; do [[ -s "$work/out/$f" ]] || fail "missing $f"; done
+"$bin/s2c-bench-edit" refit "$work/out/edited.ply" "$work/out/repaired.ply" "$src/fixtures/parts/plate.truth.json" \
+  --json "$work/edit_refit.json" || fail "refit of the edited plate"
+python3 - "$work/out" "$work/edit_refit.json" <<'PY'
+import json, sys, os
+out = sys.argv[1]
+m = json.load(open(os.path.join(out, "manifest.json")))
+st = {s["name"]: s for s in m["stages"]}
+assert st["edit"]["status"] == "ok", st["edit"]
+ran = [s["name"] for s in m["stages"] if s["status"] == "ok" and not s.get("skipped")]
+assert ran == ["edit", "check"], ran
+c = json.load(open(os.path.join(out, "check.json")))
+assert c["cad_ready"], c["problems"]
+r = json.load(open(sys.argv[2]))
+# Refitted independently from the truth-labelled vertices: the four corner holes are Ø7 now.
+for h in ["hole_0", "hole_1", "hole_2", "hole_3"]:
+    print("%s: r %.4f → %.4f" % (h, r[h]["before"]["radius"], r[h]["radius"]))
+    assert abs(r[h]["radius"] - 3.5) <= 0.05, (h, r[h]["radius"])
+# The centre hole and the sides are beyond the corner holes' 1-ring: not moved at all.
+assert r["hole_center"]["radius"] == r["hole_center"]["before"]["radius"], r["hole_center"]
+for s in ["side_xp", "side_xn", "side_yp", "side_yn"]:
+    assert r[s]["point"] == r[s]["before"]["point"], s
+f = json.load(open(os.path.join(out, "edited.features.json")))
+rad = sorted(p["shape"]["radius"] for p in f["patches"] if p["shape"]["type"] == "cylinder" and abs(p["shape"]["radius"] - 3.5) < 0.01)
+assert len(rad) >= 4, rad
+rep = json.load(open(os.path.join(out, "reports", "edit.json")))
+assert rep["counts"]["asserts_passed"] == 2, rep["counts"]
+print("edit: corner holes widened, centre hole and sides untouched")
+PY
 # Laser scans go through the same pipeline.
 "$bin/scan2cad" reconstruct "$src/fixtures/scans/shaft_laser" -o "$work/laser.ply" --quiet || fail "laser reconstruct"
 [[ -s "$work/laser.ply" ]] || fail "laser mesh missing"

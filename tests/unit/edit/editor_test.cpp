@@ -144,7 +144,9 @@ TEST(Edit, ShaftRadiusKeepsCoaxialAndEqualRadius) {
   EXPECT_NEAR(tip.shape.radius, 11.0, kMm);  // equal_radius propagated
   EXPECT_LT((tip.shape.point - Eigen::Vector3d(0, 0, 40)).norm(), kMm);
   for (int v : on_primitive(p, "end")) {
-    if (p.before[v].head<2>().norm() < 7.9) EXPECT_EQ(displacement(p, ed.mesh(), v), 0.0);
+    if (p.before[v].head<2>().norm() < 7.9) {
+      EXPECT_EQ(displacement(p, ed.mesh(), v), 0.0);
+    }
   }
   expect_cad_ready(ed.mesh());
 }
@@ -202,7 +204,9 @@ TEST(Edit, LowLevelVertexEditBubblesIntoItsPatchOnly) {
   int moved = 0;
   for (int v = 0; v < static_cast<int>(p.before.size()); ++v) {
     const double d = displacement(p, ed.mesh(), v);
-    if (!top_set.count(v)) EXPECT_EQ(d, 0.0) << v;
+    if (!top_set.count(v)) {
+      EXPECT_EQ(d, 0.0) << v;
+    }
     moved += d > 0.0;
   }
   EXPECT_GT(moved, 1);  // the patch around the vertex follows

@@ -67,7 +67,12 @@ struct EditOptions {
   /// Patches smaller than this fraction of the total area (and freeform ones) are crumbs: they pass
   /// the freedom of the 1-ring on to their neighbours.
   double small_patch_fraction = 0.002;
-  /// When triangles fold, free up to this many further rings of patches before giving up.
+  /// Free vertices lie within influence × half the size of the largest modified feature (at least
+  /// 4× the largest displacement) of a moved vertex; the rest of a free patch stays fixed, so an
+  /// edit of a hole costs the same in a plane of 1k or of 1M vertices. ≤ 0: whole free patches.
+  double influence = 1.0;
+  /// When triangles fold, free up to this many further rings of patches (and double the reach)
+  /// before giving up.
   int max_extra_rings = 2;
 };
 
