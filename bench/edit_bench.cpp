@@ -36,21 +36,22 @@ using Eigen::Vector3d;
 using features::ShapeType;
 using json = nlohmann::json;
 
-// Per truth primitive: the vertices all of whose faces carry its label in `mesh`.
+// Per truth primitive: the vertices of faces labelled with it (the truth labels of `mesh`) that lie
+// within `pick_mm` of its surface. On a CAD tessellation every vertex sits on a border, so a rim
+// vertex counts for both the hole and the plane it bounds.
 std::vector<std::vector<int>> primitive_vertices(const Mesh& mesh, const bench::Truth& truth, double pick_mm) {
   bench::Tolerances tol;
   tol.label_max_mm = pick_mm;
   const std::vector<int> labels = bench::label_faces(mesh, truth, tol);
-  std::vector<int> vlabel(mesh.n_vertices(), -2);
-  for (auto f : mesh.faces())
-    for (auto v : mesh.fv_range(f)) {
-      int& l = vlabel[v.idx()];
-      const int fl = labels[f.idx()];
-      l = l == -2 ? fl : (l == fl ? l : -1);
-    }
-  std::vector<std::vector<int>> out(truth.primitives.size());
-  for (int v = 0; v < static_cast<int>(vlabel.size()); ++v)
-    if (vlabel[v] >= 0) out[vlabel[v]].push_back(v);
+  std::vector<std::set<int>> sets(truth.primitives.size());
+  for (auto f : mesh.faces()) {
+    const int l = labels[f.idx()];
+    if (l < 0) continue;
+    for (auto v : mesh.fv_range(f))
+      if (bench::shape_distance(truth.primitives[l].shape, to_eigen(mesh.point(v))) <= pick_mm) sets[l].insert(v.idx());
+  }
+  std::vector<std::vector<int>> out;
+  for (const auto& s : sets) out.emplace_back(s.begin(), s.end());
   return out;
 }
 

@@ -299,24 +299,35 @@ struct Editor::Impl {
       }
     return unknowns;
   }
-  // Free analytic patches that were clean (a CAD tessellation) go back exactly onto the shape
-  // their border (handles and fixed vertices, which are exact) spans; with too few border
-  // vertices, onto the shape of all of them.
-  void snap_clean_patches(const std::vector<int>& free_patches, const std::vector<int>& unknowns) {
-    if (opt.clean_rms < 0.0) return;
+  // Free analytic patches go back onto the shape their border spans (handles and fixed vertices,
+  // which the edit placed or kept), each vertex keeping its signed offset from the patch's shape
+  // before the edit: a CAD tessellation (offsets 0) lands exactly on it, so stretched planes stay
+  // planes; a scan keeps its noise while the patch's fitted shape follows the border instead of
+  // ARAP's compromise. `before`: positions before this edit of the vertices it moved.
+  void snap_patches(const std::vector<int>& free_patches, const std::vector<int>& unknowns,
+                    const std::unordered_map<int, Vector3d>& before) {
+    if (opt.snap_max_rms < 0.0) return;
     std::vector<char> unknown(pos.size(), 0);
     for (int v : unknowns) unknown[v] = 1;
+    auto old_pos = [&](int v) -> const Vector3d& {
+      auto it = before.find(v);
+      return it != before.end() ? it->second : pos[v];
+    };
     for (int q : free_patches) {
       const Shape& s = fs.patches[q].shape;
-      if (s.type == ShapeType::freeform || fs.patches[q].rms > opt.clean_rms) continue;
-      std::vector<int> border;
+      if (s.type == ShapeType::freeform || fs.patches[q].rms > opt.snap_max_rms) continue;
+      auto offset = [&](int v) {
+        const Vector3d& p = old_pos(v);
+        return (p - project_onto(s, p)).dot(features::surface_normal(s, p));
+      };
+      std::vector<Vector3d> border;
       for (int v : patch_verts[q])
-        if (!unknown[v]) border.push_back(v);
-      features::Fit fit = refit(s.type, points(border), false);
-      if (!fit.ok || border.size() < 8) fit = refit(s.type, points(patch_verts[q]), false);
+        if (!unknown[v]) border.push_back(pos[v] - offset(v) * features::surface_normal(s, pos[v]));
+      if (border.size() < 8) continue;
+      const features::Fit fit = refit(s.type, border, false);
       if (!fit.ok) continue;
       for (int v : patch_verts[q])
-        if (unknown[v]) pos[v] = project_onto(fit.shape, pos[v]);
+        if (unknown[v]) pos[v] = project_onto(fit.shape, pos[v]) + offset(v) * features::surface_normal(fit.shape, pos[v]);
     }
   }
   // The first face that folded over (its normal turned by more than 90° from where the edit
@@ -675,7 +686,8 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
     if (!unknowns.empty()) {
       rep.factorization_reused = reuse;
       rep.arap_iterations = cache.solver->solve(pos, opt.arap_iterations, opt.arap_tolerance, reuse).iterations;
-      snap_clean_patches(free_patches, unknowns);
+      std::unordered_map<int, Vector3d> before(saved.begin(), saved.end());
+      snap_patches(free_patches, unknowns, before);
     }
     const int folded = first_folded(checked_faces, normals_before, turned);
     if (folded < 0) {
