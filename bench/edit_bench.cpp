@@ -151,8 +151,17 @@ Run run_edits(const Mesh& mesh, const features::FeatureSet& fs, const edit::Edit
   return r;
 }
 
+json times_json(const edit::EditReport& r) {
+  const auto& t = r.time;
+  return {{"propagation_ms", t.propagation * 1e3}, {"region_ms", t.region * 1e3},
+          {"factorization_ms", t.factorization * 1e3}, {"solve_ms", t.solve * 1e3}, {"snap_ms", t.snap * 1e3},
+          {"check_ms", t.check * 1e3}, {"commit_ms", t.commit * 1e3}};
+}
+
 json run_json(const Run& r) {
   return {{"first_ms", r.first_s * 1e3},
+          {"first_breakdown", times_json(r.first)},
+          {"last_breakdown", times_json(r.last)},
           {"step_p50_ms", percentile(r.steps_s, 0.5) * 1e3},
           {"step_p95_ms", percentile(r.steps_s, 0.95) * 1e3},
           {"steps", r.steps_s.size()},
@@ -165,7 +174,8 @@ json run_json(const Run& r) {
           {"factorization_reused_last", r.last.factorization_reused}};
 }
 
-int cmd_speed(const std::string& part, const std::vector<int>& sizes, int steps, const std::string& out) {
+int cmd_speed(const std::string& part, const std::vector<int>& sizes, int steps, const std::string& out, bool peer,
+              double influence) {
   const auto parts = std::filesystem::path(S2C_SOURCE_DIR) / "fixtures/parts";
   const bench::Truth truth = bench::read_truth(parts / (part + ".truth.json"));
   if (part != "plate") throw InvalidInput("speed: the scenario is written for the plate (its corner holes)");
@@ -196,12 +206,13 @@ int cmd_speed(const std::string& part, const std::vector<int>& sizes, int steps,
     auto widen = [&](edit::Editor& ed, int k) { return ed.set_radius(hole(ed), 3.2 + 0.01 * k); };
     const double final_radius = 3.2 + 0.01 * steps;
     edit::EditOptions local, whole;
+    local.influence = influence;
     whole.whole_mesh = true;
     const Run a = run_edits(mesh, fs, local, steps, widen);
     Run b;
     std::string whole_error;
     try {
-      b = run_edits(mesh, fs, whole, steps, widen);
+      if (peer) b = run_edits(mesh, fs, whole, steps, widen);
     } catch (const ProcessingError& e) {
       whole_error = e.what();  // the peer failing is a result too
       std::fprintf(stderr, "whole-mesh ARAP failed on %zu vertices: %s\n", mesh.n_vertices(), e.what());
@@ -223,8 +234,8 @@ int cmd_speed(const std::string& part, const std::vector<int>& sizes, int steps,
     int outside = 0;
     for (int v = 0; v < static_cast<int>(a.displacement.size()); ++v)
       if (a.displacement[v] != 0.0 && !a.region_vertices.count(v)) ++outside;
-    const double ratio_first = b.first_s / a.first_s;
-    const double ratio_p95 = percentile(b.steps_s, 0.95) / std::max(percentile(a.steps_s, 0.95), 1e-12);
+    const double ratio_first = peer ? b.first_s / a.first_s : 0.0;
+    const double ratio_p95 = peer ? percentile(b.steps_s, 0.95) / std::max(percentile(a.steps_s, 0.95), 1e-12) : 0.0;
     std::printf("| %zu | widen a corner hole r 3 → %.2f in %d steps | %.1f ms | %.1f ms | %.1f ms | %d | %.1f ms | %.1f ms | %d | %.1f× | %.1f× | %.2g mm | %.2g mm | %d |\n",
                 mesh.n_vertices(), final_radius, steps, a.first_s * 1e3, percentile(a.steps_s, 0.5) * 1e3,
                 percentile(a.steps_s, 0.95) * 1e3, a.first.free_vertices, b.first_s * 1e3,
@@ -267,10 +278,14 @@ int main(int argc, char** argv) {
   s->add_option("--vertices", sizes, "Vertex counts of the refined meshes")->delimiter(',');
   s->add_option("--steps", steps, "Interactive steps after the first edit")->capture_default_str();
   s->add_option("--json", out, "Also write the results as JSON");
+  bool no_peer = false;
+  double influence = edit::EditOptions{}.influence;
+  s->add_flag("--no-whole-mesh", no_peer, "Skip the whole-mesh ARAP comparison");
+  s->add_option("--influence", influence, "EditOptions::influence of the restricted edit")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   try {
     if (*r) return cmd_refit(edited, original, truth, pick, out);
-    return cmd_speed(part, sizes, steps, out);
+    return cmd_speed(part, sizes, steps, out, !no_peer, influence);
   } catch (const InvalidInput& e) {
     std::fprintf(stderr, "s2c-bench-edit: %s\n", e.what());
     return 2;

@@ -86,6 +86,7 @@ struct Editor::Impl {
   std::vector<std::vector<int>> patch_verts, line_verts;
   Incidence vertex_patches, vertex_lines;
   std::vector<int> vv_start, vv;  // vertex → neighbouring vertices (compressed rows)
+  std::vector<int> vf_start, vf;  // vertex → incident faces (compressed rows)
   std::vector<int> face_patch;
   std::map<std::string, FeatureRef> by_id;
   std::set<FeatureRef> locks;
@@ -249,20 +250,29 @@ struct Editor::Impl {
   std::vector<int> region_unknowns(const std::set<int>& free_set, const std::unordered_map<int, Vector3d>& target,
                                    double reach, std::vector<std::array<int, 3>>& region_faces,
                                    std::vector<int>& changed_faces) const {
-    std::vector<int> unknowns;
-    std::vector<char> candidate(pos.size(), 0);
-    for (int q : free_set)
-      for (int v : patch_verts[q]) {
-        if (candidate[v] || target.count(v)) continue;
-        bool all_free = true;
-        vertex_patches.each(v, [&](int r) { all_free = all_free && free_set.count(r); });
-        if (all_free) candidate[v] = 1;
+    std::vector<char> free_patch(fs.patches.size(), 0), handle(pos.size(), 0);
+    for (int q : free_set) free_patch[q] = 1;
+    for (const auto& [v, p] : target) handle[v] = 1;
+    // A candidate: not a handle, and every patch around it is free. Decided lazily (0 unknown,
+    // 1 yes, 2 no) so that the cost follows the region, not the size of the patches it lies in.
+    std::vector<char> state(pos.size(), 0);
+    auto candidate = [&](int v) {
+      if (state[v] == 0) {
+        bool ok = !handle[v] && vertex_patches.start[v] < vertex_patches.start[v + 1];
+        vertex_patches.each(v, [&](int r) { ok = ok && free_patch[r]; });
+        state[v] = ok ? 1 : 2;
       }
+      return state[v] == 1;
+    };
+    std::vector<int> unknowns;
     if (std::isinf(reach)) {
-      for (int v = 0; v < static_cast<int>(pos.size()); ++v)
-        if (candidate[v]) unknowns.push_back(v);
+      for (int q : free_set)
+        for (int v : patch_verts[q])
+          if (state[v] == 0 && candidate(v)) unknowns.push_back(v);
+      std::sort(unknowns.begin(), unknowns.end());
+      unknowns.erase(std::unique(unknowns.begin(), unknowns.end()), unknowns.end());
     } else {
-      // Multi-source Dijkstra from the moved vertices through candidates.
+      // Multi-source Dijkstra from the moved vertices through candidates, on the rest shape.
       std::vector<double> dist(pos.size(), std::numeric_limits<double>::infinity());
       using Item = std::pair<double, int>;
       std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
@@ -275,12 +285,11 @@ struct Editor::Impl {
         const auto [d, v] = queue.top();
         queue.pop();
         if (d > dist[v]) continue;
-        if (candidate[v]) unknowns.push_back(v);
+        if (!handle[v]) unknowns.push_back(v);
         for (int e = vv_start[v]; e < vv_start[v + 1]; ++e) {
           const int w = vv[e];
-          if (!candidate[w]) continue;
           const double dw = d + (original[w] - original[v]).norm();  // stable while dragging
-          if (dw <= reach && dw < dist[w]) {
+          if (dw <= reach && dw < dist[w] && candidate(w)) {
             dist[w] = dw;
             queue.push({dw, w});
           }
@@ -288,15 +297,26 @@ struct Editor::Impl {
       }
       std::sort(unknowns.begin(), unknowns.end());
     }
-    std::vector<char> unknown(pos.size(), 0);
-    for (int v : unknowns) unknown[v] = 1;
-    for (int q : free_set)
-      for (int f : fs.patches[q].faces) {
-        const auto& t = faces[f];
-        const bool has_unknown = unknown[t[0]] || unknown[t[1]] || unknown[t[2]];
-        if (has_unknown) region_faces.push_back(t);
-        if (has_unknown || target.count(t[0]) || target.count(t[1]) || target.count(t[2])) changed_faces.push_back(f);
+    // Faces of free patches around unknowns (the energy) and around unknowns or handles (the fold
+    // check), found through the vertices' incident faces.
+    std::vector<char> kind(faces.size(), 0);  // 1 changed, 2 changed and in the energy
+    std::vector<int> touched;
+    auto visit = [&](int v, char k) {
+      for (int e = vf_start[v]; e < vf_start[v + 1]; ++e) {
+        const int f = vf[e];
+        const int q = face_patch[f];
+        if (q < 0 || !free_patch[q]) continue;
+        if (kind[f] == 0) touched.push_back(f);
+        kind[f] = std::max(kind[f], k);
       }
+    };
+    for (int v : unknowns) visit(v, 2);
+    for (const auto& [v, p] : target) visit(v, 1);
+    std::sort(touched.begin(), touched.end());
+    for (int f : touched) {
+      changed_faces.push_back(f);
+      if (kind[f] == 2) region_faces.push_back(faces[f]);
+    }
     return unknowns;
   }
   // Free analytic patches go back onto the shape their border spans (handles and fixed vertices,
@@ -313,21 +333,32 @@ struct Editor::Impl {
       auto it = before.find(v);
       return it != before.end() ? it->second : pos[v];
     };
+    // Per patch: its unknowns, and its border: the vertices next to them that the solve kept
+    // (handles, fixed) — the ring that determines where the region must lie.
+    std::map<int, std::vector<int>> inner, border;
+    std::vector<char> in_border(pos.size(), 0);
+    for (int v : unknowns)
+      vertex_patches.each(v, [&](int q) { inner[q].push_back(v); });
+    for (int v : unknowns)
+      for (int e = vv_start[v]; e < vv_start[v + 1]; ++e) {
+        const int w = vv[e];
+        if (unknown[w] || in_border[w]) continue;
+        in_border[w] = 1;
+        vertex_patches.each(w, [&](int q) { border[q].push_back(w); });
+      }
     for (int q : free_patches) {
       const Shape& s = fs.patches[q].shape;
-      if (s.type == ShapeType::freeform || fs.patches[q].rms > opt.snap_max_rms) continue;
+      if (s.type == ShapeType::freeform || fs.patches[q].rms > opt.snap_max_rms || !inner.count(q)) continue;
       auto offset = [&](int v) {
         const Vector3d& p = old_pos(v);
         return (p - project_onto(s, p)).dot(features::surface_normal(s, p));
       };
-      std::vector<Vector3d> border;
-      for (int v : patch_verts[q])
-        if (!unknown[v]) border.push_back(pos[v] - offset(v) * features::surface_normal(s, pos[v]));
-      if (border.size() < 8) continue;
-      const features::Fit fit = refit(s.type, border, false);
+      std::vector<Vector3d> ring;
+      for (int v : border[q]) ring.push_back(pos[v] - offset(v) * features::surface_normal(s, pos[v]));
+      if (ring.size() < 8) continue;
+      const features::Fit fit = refit(s.type, ring, false);
       if (!fit.ok) continue;
-      for (int v : patch_verts[q])
-        if (unknown[v]) pos[v] = project_onto(fit.shape, pos[v]) + offset(v) * features::surface_normal(fit.shape, pos[v]);
+      for (int v : inner[q]) pos[v] = project_onto(fit.shape, pos[v]) + offset(v) * features::surface_normal(fit.shape, pos[v]);
     }
   }
   // The first face that folded over (its normal turned by more than 90° from where the edit
@@ -412,6 +443,14 @@ Editor::Editor(Mesh mesh, features::FeatureSet fs, EditOptions options) : impl_(
     }
     m.vv.reserve(m.vv_start[nv]);
     for (const auto& n : nb) m.vv.insert(m.vv.end(), n.begin(), n.end());
+    m.vf_start.assign(nv + 1, 0);
+    for (const auto& t : m.faces)
+      for (int v : t) ++m.vf_start[v + 1];
+    for (int v = 0; v < nv; ++v) m.vf_start[v + 1] += m.vf_start[v];
+    m.vf.resize(m.vf_start[nv]);
+    std::vector<int> fill(m.vf_start.begin(), m.vf_start.end() - 1);
+    for (int f = 0; f < nf; ++f)
+      for (int v : m.faces[f]) m.vf[fill[v]++] = f;
   }
   const Bounds b = bounds(m.mesh);
   m.diagonal = std::max(b.diagonal(), 1e-9);
@@ -643,6 +682,13 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
     }
   }
 
+  auto lap = std::chrono::steady_clock::now();
+  auto step = [&](double& into) {
+    const auto now = std::chrono::steady_clock::now();
+    into += std::chrono::duration<double>(now - lap).count();
+    lap = now;
+  };
+  step(rep.time.propagation);
   // The ARAP region (paper §4.2): patches sharing a moved vertex are free, the rest fixed.
   std::vector<int> handles;
   for (const auto& [v, p] : target) handles.push_back(v);
@@ -656,12 +702,13 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
   // Place the handles and solve; when triangles fold (a scan's strip of small patches between the
   // edited feature and a big fixed one cannot absorb the change), free the next ring and retry.
   std::vector<std::pair<int, Vector3d>> saved;
-  std::vector<int> free_patches, unknowns;
+  std::vector<int> free_patches, unknowns, checked_faces;
+  std::vector<Vector3d> normals_before;
   double reach = influence_radius(new_shape, target);
   for (int ring = 0;; ++ring) {
     free_patches.assign(free_set.begin(), free_set.end());
     std::vector<std::array<int, 3>> region_faces;
-    std::vector<int> checked_faces;
+    checked_faces.clear();
     for (const auto& [f, s] : new_shape)
       if (f.kind == FeatureRef::Kind::patch)
         checked_faces.insert(checked_faces.end(), fs.patches[f.index].faces.begin(), fs.patches[f.index].faces.end());
@@ -669,10 +716,11 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
     saved.clear();
     for (int v : handles) saved.emplace_back(v, pos[v]);
     for (int v : unknowns) saved.emplace_back(v, pos[v]);
-    std::vector<Vector3d> normals_before;
+    normals_before.clear();
     normals_before.reserve(checked_faces.size());
     for (int f : checked_faces) normals_before.push_back(face_normal(pos, faces[f]));
 
+    step(rep.time.region);
     // The rest shape of a new solver is the mesh before this edit (handles not yet placed).
     const bool reuse = !unknowns.empty() && cache.solver && cache.free_patches == free_patches &&
                        cache.handles == handles && cache.solver->unknowns() == unknowns;
@@ -682,14 +730,18 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
       cache.free_patches = free_patches;
       cache.handles = handles;
     }
+    step(rep.time.factorization);
     for (const auto& [v, p] : target) pos[v] = p;
     if (!unknowns.empty()) {
       rep.factorization_reused = reuse;
       rep.arap_iterations = cache.solver->solve(pos, opt.arap_iterations, opt.arap_tolerance, reuse).iterations;
+      step(rep.time.solve);
       std::unordered_map<int, Vector3d> before(saved.begin(), saved.end());
       snap_patches(free_patches, unknowns, before);
     }
+    step(rep.time.snap);
     const int folded = first_folded(checked_faces, normals_before, turned);
+    step(rep.time.check);
     if (folded < 0) {
       rep.extra_rings = ring;
       break;
@@ -730,17 +782,28 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
     patch.area = patch_area(f.index);
     patch.rms = rms_to(s, patch_verts[f.index]);
   }
+  // Free patches: refitted on at most kRefitSamples of their vertices (a stride through them) and
+  // their area updated by the faces that changed, so a huge plane around a small edit costs little.
+  constexpr std::size_t kRefitSamples = 20000;
+  std::map<int, double> area_change;
+  for (std::size_t k = 0; k < checked_faces.size(); ++k)
+    area_change[face_patch[checked_faces[k]]] +=
+        0.5 * (face_normal(pos, faces[checked_faces[k]]).norm() - normals_before[k].norm());
   for (int q : free_patches) {
     auto& patch = fs.patches[q];
     if (patch.shape.type != ShapeType::freeform) {
-      features::Fit fit = refit(patch.shape.type, points(patch_verts[q]), false);
+      const auto& all = patch_verts[q];
+      std::vector<int> sample;
+      const std::size_t stride = (all.size() + kRefitSamples - 1) / kRefitSamples;
+      for (std::size_t k = 0; k < all.size(); k += std::max<std::size_t>(stride, 1)) sample.push_back(all[k]);
+      features::Fit fit = refit(patch.shape.type, points(sample), false);
       if (fit.ok) {
         keep_sense(fit.shape, patch.shape);
         patch.shape = fit.shape;
       }
-      patch.rms = rms_to(patch.shape, patch_verts[q]);
+      patch.rms = rms_to(patch.shape, sample);
     }
-    patch.area = patch_area(q);
+    patch.area += area_change[q];
   }
   std::set<int> moved_lines;
   for (const auto& [v, p0] : saved)
@@ -788,6 +851,7 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
   }
   remove_groups(drop);
   // A new region next time may need the cache only if it is the same one; keep it.
+  step(rep.time.commit);
   rep.seconds = seconds_since(t0);
   return rep;
 }

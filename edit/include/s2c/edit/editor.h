@@ -72,7 +72,7 @@ struct EditOptions {
   /// Free vertices lie within influence × half the size of the largest modified feature (at least
   /// 4× the largest displacement) of a moved vertex; the rest of a free patch stays fixed, so an
   /// edit of a hole costs the same in a plane of 1k or of 1M vertices. ≤ 0: whole free patches.
-  double influence = 1.0;
+  double influence = 0.5;
   /// When triangles fold, free up to this many further rings of patches (and double the reach)
   /// before giving up.
   int max_extra_rings = 2;
@@ -91,6 +91,12 @@ struct EditReport {
   int extra_rings = 0;                  ///< rings freed beyond the first because triangles folded
   double max_displacement = 0.0;        ///< mm
   double seconds = 0.0;
+  /// Where the seconds went: shape maps and propagation, finding the region, building the ARAP
+  /// factorisation, ARAP iterations, putting CAD patches back on their shapes, the fold check,
+  /// updating the features.
+  struct Times {
+    double propagation = 0, region = 0, factorization = 0, solve = 0, snap = 0, check = 0, commit = 0;
+  } time;
   /// Constraints among features the edit did not set (ARAP neighbours, lines) that no longer hold:
   /// reported here and removed from features(), never kept as a false statement.
   std::vector<std::string> broken;
