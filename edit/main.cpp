@@ -103,9 +103,9 @@ int main(int argc, char** argv) {
       mesh = s2c::read_mesh(input);
       fs = s2c::features::read_features(features_path);
       const std::string hash = s2c::sha256_file(input);
-      if (!fs.mesh_sha256.empty() && fs.mesh_sha256 != hash)
+      if (fs.mesh_sha256 != hash)
         throw s2c::InvalidInput(fmt::format(
-            "{}: computed for a different mesh (its sha256 {}…, {} has {}…): run scan2cad features {} -o {} first",
+            "{}: computed for a different mesh (its sha256 '{}', {} has {}…): run scan2cad features {} -o {} first",
             features_path, fs.mesh_sha256.substr(0, 12), input, hash.substr(0, 12), input, features_path));
     }
     const s2c::CheckResult before = s2c::check_mesh(s2c::mesh_to_soup(mesh));
@@ -181,8 +181,16 @@ int main(int argc, char** argv) {
           s2c::features::write_features(fo, ff.temp_path());
         }
       }
+      std::vector<std::filesystem::path> written;
+      for (const auto& o : {output, features_out})
+        if (!o.empty()) written.emplace_back(o);
       for (const auto& [path, m] : result.exports) {
-        s2c::refuse_same_file(input, path);
+        // Inputs are never overwritten, and no two outputs share a file.
+        for (const auto& in : {input, features_path, script_path}) s2c::refuse_same_file(in, path);
+        for (const auto& w : written)
+          if (std::filesystem::absolute(w).lexically_normal() == std::filesystem::absolute(path).lexically_normal())
+            throw s2c::InvalidInput(fmt::format("{}: export \"{}\" is also another output of this run", script_path, path.string()));
+        written.push_back(path);
         if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
         auto& f = out.add(path);
         s2c::write_mesh(m, f.temp_path());

@@ -260,6 +260,7 @@ struct Editor::Impl {
       if (state[v] == 0) {
         bool ok = !handle[v] && vertex_patches.start[v] < vertex_patches.start[v + 1];
         vertex_patches.each(v, [&](int r) { ok = ok && free_patch[r]; });
+        vertex_lines.each(v, [&](int l) { ok = ok && !locks.count({FeatureRef::Kind::line, l}); });
         state[v] = ok ? 1 : 2;
       }
       return state[v] == 1;
@@ -371,7 +372,8 @@ struct Editor::Impl {
       Vector3d expected = n0;
       if (auto it = turned.find({FeatureRef::Kind::patch, face_patch[checked[k]]}); it != turned.end())
         expected = it->second * n0;
-      if (n.norm() <= 1e-12 * std::max(1.0, n0.norm()) || n.dot(expected) <= 0.0) {
+      // Faces that were degenerate before the edit are not judged (their normal means nothing).
+      if (n0.norm() > 0.0 && (n.norm() <= 1e-12 * n0.norm() || n.dot(expected) <= 0.0)) {
         const auto& t = faces[checked[k]];
         spdlog::debug("folded face {}: n0 {} {} {} n {} {} {}; corners {} {} {} at {} {} {} / {} {} {} / {} {} {}", checked[k], n0.x(), n0.y(), n0.z(), n.x(), n.y(), n.z(), t[0], t[1], t[2],
                       pos[t[0]].x(), pos[t[0]].y(), pos[t[0]].z(), pos[t[1]].x(), pos[t[1]].y(), pos[t[1]].z(), pos[t[2]].x(), pos[t[2]].y(), pos[t[2]].z());
@@ -605,23 +607,44 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
     auto it = new_shape.find(f);
     return it != new_shape.end() ? it->second : shape(f);
   };
-  auto apply_map = [&](FeatureRef f, const ShapeMap& map) {
+  // Each map moves a vertex once, however many of the features it is applied to share it (a
+  // cylinder and its rim circles moved together); `map_id` names the map.
+  std::unordered_map<int, int> moved_by;  // vertex → the last map that moved it
+  int next_map = 0;
+  auto apply_map = [&](FeatureRef f, const ShapeMap& map, int map_id) {
     if (locks.count(f) && !map.is_identity())
       throw ProcessingError(fmt::format("{} is locked and the edit would change it ({})", id(f), map.describe(shape(f))));
-    new_shape[f] = map.apply(current(f));
+    const Shape moved = map.apply(current(f));
+    if (!finite_shape(moved))
+      throw InvalidInput(fmt::format("{}: the edit takes its shape beyond the range of numbers ({})", id(f), map.describe(shape(f))));
+    new_shape[f] = moved;
     if (map.kind == ShapeMap::Kind::affine) turned[f] = map.linear * (turned.count(f) ? turned[f] : Eigen::Matrix3d::Identity());
     for (int v : verts(f)) {
+      auto seen = moved_by.find(v);
+      if (seen != moved_by.end() && seen->second == map_id) continue;
+      moved_by[v] = map_id;
       auto it = target.find(v);
       const Vector3d base = it != target.end() ? it->second : pos[v];
       // A resize keeps each vertex's offset from the feature's surface before the edit.
-      target[v] = map.kind == ShapeMap::Kind::resize ? resize_point(shape(f), map.target, pos[v], base) : map.apply(base);
+      const Vector3d to = map.kind == ShapeMap::Kind::resize ? resize_point(shape(f), map.target, pos[v], base) : map.apply(base);
+      if (!to.allFinite())
+        throw InvalidInput(fmt::format("{}: the edit takes vertex {} beyond the range of numbers", id(f), v));
+      target[v] = to;
     }
   };
   std::deque<FeatureRef> queue;
-  for (const auto& [f, map] : initial) {
-    apply_map(f, map);
-    rep.edited.push_back(f);
-    queue.push_back(f);
+  {
+    // Features sharing one map (move/rotate/scale of a selection) share its id.
+    const ShapeMap* previous = nullptr;
+    for (const auto& [f, map] : initial) {
+      const bool same = previous && previous->kind == ShapeMap::Kind::affine && map.kind == ShapeMap::Kind::affine &&
+                        previous->linear == map.linear && previous->offset == map.offset;
+      if (!same) ++next_map;
+      apply_map(f, map, next_map);
+      previous = &map;
+      rep.edited.push_back(f);
+      queue.push_back(f);
+    }
   }
   // Greedy propagation over the constraint groups (paper §4.3), patches only: line constraints
   // follow from the patches the lines bound.
@@ -659,7 +682,7 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
                                             group_text(g), id(other)));
         rep.propagation.push_back(fmt::format("{} {}: {} {}", gr.id, features::constraint_name(*gr.constraint),
                                               id(other), adj->describe(current(other))));
-        apply_map(other, *adj);
+        apply_map(other, *adj, ++next_map);
         ++adjusted[other];
         if (std::find(rep.propagated.begin(), rep.propagated.end(), other) == rep.propagated.end())
           rep.propagated.push_back(other);
@@ -682,6 +705,13 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
     }
   }
 
+  // A locked line keeps its vertices: the edit may not move them, ARAP keeps them fixed.
+  for (const auto& [v, p] : target)
+    if ((p - pos[v]).squaredNorm() > 0.0)
+      vertex_lines.each(v, [&](int l) {
+        if (locks.count({FeatureRef::Kind::line, l}))
+          throw ProcessingError(fmt::format("the edit moves vertex {} of {}, which is locked", v, fs.lines[l].id));
+      });
   auto lap = std::chrono::steady_clock::now();
   auto step = [&](double& into) {
     const auto now = std::chrono::steady_clock::now();
@@ -760,6 +790,8 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
           "features too)",
           folded, fs.patches[face_patch[folded]].id, ring));
   }
+  // The cached solver's rest shape is only valid while nothing else moved its region.
+  if (unknowns.empty() && !target.empty()) cache = {};
   rep.free_vertices = static_cast<int>(unknowns.size());
   for (int q : free_patches) rep.free.push_back({FeatureRef::Kind::patch, q});
 
@@ -831,6 +863,12 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
     bool involved = false;
     for (FeatureRef f : members(fs.groups[g])) involved = involved || touched.count(f);
     if (!involved) continue;
+    if (*fs.groups[g].constraint == ConstraintKind::symmetric) {
+      rep.broken.push_back(fmt::format("{} cannot be verified after the edit (mirror symmetry is not measured here)",
+                                       group_text(g)));
+      drop.insert(g);
+      continue;
+    }
     const ConstraintResidual r = group_residual(g, [&](FeatureRef f) -> const Shape& { return shape(f); });
     const ConstraintResidual r0 = group_residual(g, [&](FeatureRef f) -> const Shape& {
       return f.kind == FeatureRef::Kind::patch ? patch_shapes_before[f.index] : line_shapes_before[f.index];
@@ -917,9 +955,10 @@ EditReport Editor::constrain(ConstraintKind kind, const std::vector<FeatureRef>&
   }
   // The group is added first so that the edit propagates from it consistently; removed on failure.
   features::Group g;
-  int next = 0;
-  for (const auto& gr : m.fs.groups)
-    if (gr.id.size() > 1 && gr.id[0] == 'G') next = std::max(next, std::atoi(gr.id.c_str() + 1) + 1);
+  std::set<std::string> taken;
+  for (const auto& gr : m.fs.groups) taken.insert(gr.id);
+  std::size_t next = m.fs.groups.size();
+  while (taken.count(fmt::format("G{}", next))) ++next;
   g.id = fmt::format("G{}", next);
   g.kind = "constraint";
   g.constraint = kind;

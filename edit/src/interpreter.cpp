@@ -49,7 +49,7 @@ class Interpreter {
       } catch (const ProcessingError& e) {
         throw ProcessingError(fmt::format("{}:{}: `{}`: {}", script_.source, st.at.line, st.text, e.what()));
       } catch (const InvalidInput& e) {
-        throw ScriptError(script_.source, st.at, fmt::format("`{}`: {}", st.text, e.what()));
+        throw ScriptError(script_.source, st.name.empty() ? st.at : st.name_at, fmt::format("`{}`: {}", st.text, e.what()));
       }
       result.statements.push_back(std::move(rep));
     }
@@ -270,7 +270,12 @@ class Interpreter {
       switch (s.picker) {
         case Picker::highest:
         case Picker::lowest: {
-          const Vector3d d = s.picker_arg ? vector(s.picker_arg, "the direction").normalized() : Vector3d::UnitZ();
+          Vector3d d = Vector3d::UnitZ();
+          if (s.picker_arg) {
+            d = vector(s.picker_arg, "the direction");
+            if (d.norm() == 0.0) fail(s.picker_arg->at, "the direction is the zero vector");
+            d.normalize();
+          }
           const double h = ed_.centroid(f).dot(d);
           return s.picker == Picker::highest ? h : -h;
         }
@@ -322,12 +327,12 @@ class Interpreter {
     for (const auto& b : r.broken) say("  warning: " + b);
   }
 
+  // The features of every member, each once, in order.
   Selection members(const Statement& st) const {
     Selection out;
-    for (std::size_t k = 0; k < st.members.size(); ++k) {
-      const Selection s = nonempty(st.members[k], st.member_at[k]);
-      out.insert(out.end(), s.begin(), s.end());
-    }
+    for (std::size_t k = 0; k < st.members.size(); ++k)
+      for (FeatureRef f : nonempty(st.members[k], st.member_at[k]))
+        if (std::find(out.begin(), out.end(), f) == out.end()) out.push_back(f);
     return out;
   }
 
@@ -337,8 +342,7 @@ class Interpreter {
       case Statement::Kind::param: {
         Value v;
         if (auto it = opt_.overrides.find(st.name); it != opt_.overrides.end()) {
-          const Script one = parse_script("let _ = " + it->second, "--set " + st.name);
-          v = eval(one.statements.at(0).value);
+          v = eval(parse_expression(it->second, fmt::format("--set {}={}", st.name, it->second)));
           say(fmt::format("  {} = {} (from --set)", st.name, it->second));
         } else {
           v = eval(st.value);
@@ -441,8 +445,10 @@ class Interpreter {
       rep.selected = ids(s);
       const auto kind = features::constraint_kind(st.constraint);
       const auto& o = ed_.options();
+      std::optional<double> value;
+      if (st.value) value = number(st.value, "the constraint value");
       for (std::size_t k = 1; k < s.size(); ++k) {
-        const auto r = pair_residual(kind, std::nullopt, ed_.shape(s[0]), ed_.shape(s[k]));
+        const auto r = pair_residual(kind, value, ed_.shape(s[0]), ed_.shape(s[k]));
         if (!r.checked)
           fail(st.at, fmt::format("{} cannot be measured between {} and {}", st.constraint, ed_.id(s[0]), ed_.id(s[k])));
         if (!holds(r, o.angle_tolerance_deg, o.length_tolerance))

@@ -43,7 +43,12 @@ std::vector<Token> tokenize(const std::string& text, const std::string& source) 
   int line = 1;
   std::size_t line_start = 0;
   std::size_t i = 0;
-  auto here = [&] { return Location{line, static_cast<int>(i - line_start) + 1}; };
+  // Columns count characters, not bytes (UTF-8 continuation bytes are skipped).
+  auto here = [&] {
+    int column = 1;
+    for (std::size_t k = line_start; k < i; ++k) column += (static_cast<unsigned char>(text[k]) & 0xC0) != 0x80;
+    return Location{line, column};
+  };
   while (i < text.size()) {
     const char c = text[i];
     if (c == '\n') {

@@ -26,10 +26,23 @@ const std::set<std::string> kKeywords = {"param", "let",    "select", "where",  
                                          "scale", "constrain", "unconstrain", "lock", "assert", "export", "by",
                                          "about", "at",     "and",    "or",          "not",    "adjacent", "to"};
 
+// Nesting deeper than this (parentheses, brackets, unary operators, `not`) is refused: the
+// parser, the interpreter and the tree's destructor all recurse over it.
+constexpr int kMaxDepth = 256;
+// Terms in one chain of + - * / or and / or: a chain is a left-deep tree.
+constexpr int kMaxChain = 4096;
+
 class Parser {
  public:
   Parser(std::vector<Token> tokens, const std::string& text, std::string source)
       : t_(std::move(tokens)), text_(text), source_(std::move(source)) {}
+
+  // One expression and nothing after it (--set values).
+  ExprPtr whole_expression() {
+    ExprPtr e = expr();
+    if (peek().kind != Tok::newline && peek().kind != Tok::end) fail("end of the value");
+    return e;
+  }
 
   Script script() {
     Script s;
@@ -176,6 +189,10 @@ class Parser {
       st.kind = Statement::Kind::check;
       if (peek().kind == Tok::ident && is_symbol("(", 1)) {
         constraint_call(st);
+        if (is_symbol("=")) {  // fixed_angle / equal_angle: the angle that must hold
+          ++i_;
+          st.value = expr();
+        }
       } else {
         st.name_at = peek().at;
       st.name = name("a selection name or a constraint kind");
@@ -252,14 +269,17 @@ class Parser {
   }
 
   ConditionPtr condition() {
+    Deeper guard(*this);
     ConditionPtr left = conjunction();
     if (!is_word("or")) return left;
     auto c = std::make_shared<Condition>();
     c->kind = Condition::Kind::any_of;
     c->at = left->at;
     c->children.push_back(left);
+    int n = 0;
     while (is_word("or")) {
       ++i_;
+      count_chain(n);
       c->children.push_back(conjunction());
     }
     return c;
@@ -271,13 +291,16 @@ class Parser {
     c->kind = Condition::Kind::all_of;
     c->at = left->at;
     c->children.push_back(left);
+    int n = 0;
     while (is_word("and")) {
       ++i_;
+      count_chain(n);
       c->children.push_back(unary_condition());
     }
     return c;
   }
   ConditionPtr unary_condition() {
+    Deeper guard(*this);
     if (is_word("not")) {
       auto c = std::make_shared<Condition>();
       c->kind = Condition::Kind::negate;
@@ -386,31 +409,37 @@ class Parser {
     return expr();
   }
 
-  ExprPtr binary(char op, ExprPtr a, ExprPtr b) {
+  ExprPtr binary(char op, ExprPtr a, ExprPtr b, Location at) {
     auto e = std::make_shared<Expr>();
     e->kind = Expr::Kind::binary;
-    e->at = a->at;
+    e->at = at;  // errors of the operation (division by zero, vector × vector) point at the operator
     e->op = op;
     e->args = {std::move(a), std::move(b)};
     return e;
   }
   ExprPtr expr() {
+    Deeper guard(*this);
     ExprPtr e = term();
+    int n = 0;
     while (is_symbol("+") || is_symbol("-")) {
-      const char op = next().text[0];
-      e = binary(op, e, term());
+      count_chain(n);
+      const Token& op = next();
+      e = binary(op.text[0], e, term(), op.at);
     }
     return e;
   }
   ExprPtr term() {
     ExprPtr e = factor();
+    int n = 0;
     while (is_symbol("*") || is_symbol("/")) {
-      const char op = next().text[0];
-      e = binary(op, e, factor());
+      count_chain(n);
+      const Token& op = next();
+      e = binary(op.text[0], e, factor(), op.at);
     }
     return e;
   }
   ExprPtr factor() {
+    Deeper guard(*this);
     if (is_symbol("-") || is_symbol("+")) {
       const Token& t = next();
       ExprPtr inner = factor();
@@ -430,7 +459,7 @@ class Parser {
       k->kind = Expr::Kind::number;
       k->at = next().at;
       k->number = 180.0 / M_PI;
-      e = binary('*', e, k);
+      e = binary('*', e, k, k->at);
     }
     return e;
   }
@@ -473,8 +502,21 @@ class Parser {
     fail("a number, a name, '[' or '('");
   }
 
+  struct Deeper {
+    Parser& p;
+    explicit Deeper(Parser& parser) : p(parser) {
+      if (++p.depth_ > kMaxDepth)
+        throw ScriptError(p.source_, p.peek().at, fmt::format("nested more than {} levels deep", kMaxDepth));
+    }
+    ~Deeper() { --p.depth_; }
+  };
+  void count_chain(int& n) const {
+    if (++n > kMaxChain) throw ScriptError(source_, peek().at, fmt::format("more than {} terms in one expression", kMaxChain));
+  }
+
   std::vector<Token> t_;
   std::size_t i_ = 0;
+  int depth_ = 0;
   const std::string& text_;
   std::string source_;
 };
@@ -484,6 +526,11 @@ class Parser {
 Script parse_script(const std::string& text, const std::string& source) {
   Parser p(tokenize(text, source), text, source);
   return p.script();
+}
+
+ExprPtr parse_expression(const std::string& text, const std::string& source) {
+  Parser p(tokenize(text, source), text, source);
+  return p.whole_expression();
 }
 
 }  // namespace s2c::edit

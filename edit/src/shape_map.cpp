@@ -23,6 +23,11 @@ Vector3d any_perpendicular(const Vector3d& a) {
 }
 }  // namespace
 
+bool finite_shape(const Shape& s) {
+  return s.point.allFinite() && s.dir.allFinite() && std::isfinite(s.radius) && std::isfinite(s.half_angle_deg) &&
+         std::isfinite(s.length) && s.start.allFinite() && s.end.allFinite() && std::isfinite(s.angle_deg);
+}
+
 Vector3d direction_of(const Shape& s) {
   switch (s.type) {
     case ShapeType::plane:
@@ -79,6 +84,7 @@ ShapeMap ShapeMap::align(const Vector3d& from, const Vector3d& to, const Vector3
 
 ShapeMap ShapeMap::scaling(double factor, const Vector3d& pivot) {
   ShapeMap m;
+  m.scale = factor;
   m.linear = factor * Matrix3d::Identity();
   m.offset = pivot - m.linear * pivot;
   return m;
@@ -121,6 +127,7 @@ ShapeMap ShapeMap::after(const ShapeMap& first) const {
   m.linear = linear * first.linear;
   m.offset = linear * first.offset + offset;
   m.similarity = similarity && first.similarity;
+  m.scale = scale * first.scale;
   return m;
 }
 
@@ -156,7 +163,6 @@ Shape ShapeMap::apply(const Shape& s) const {
   }
   Shape out = s;
   // For a similarity s·R: directions rotate, lengths scale by s.
-  const double scale = std::cbrt(std::abs(linear.determinant()));
   const Matrix3d rot = scale > 0.0 ? Matrix3d(linear / scale) : Matrix3d::Identity();
   out.point = apply(s.point);
   out.dir = (rot * s.dir).normalized();
@@ -179,7 +185,6 @@ std::string ShapeMap::describe(const Shape& before) const {
     return fmt::format("radius {:.4g} → {:.4g} mm", before.radius, target.radius);
   }
   if (!similarity) return "stretched";
-  const double scale = std::cbrt(std::abs(linear.determinant()));
   const Eigen::AngleAxisd aa(Matrix3d(linear / scale));
   std::string s;
   if (std::abs(aa.angle()) > 1e-9)

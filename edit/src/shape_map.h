@@ -18,6 +18,7 @@ struct ShapeMap {
   Eigen::Matrix3d linear = Eigen::Matrix3d::Identity();
   Eigen::Vector3d offset = Eigen::Vector3d::Zero();
   bool similarity = true;
+  double scale = 1.0;  ///< similarity: the factor s (lengths and radii scale by it)
   /// resize: from `source` to `target`, the same shape with another radius (cylinder, sphere,
   /// circle, arc) or half angle (cone, same apex and axis). Each vertex keeps its offset from the
   /// surface: it moves by the change of the surface under it (exact for a CAD tessellation, whose
@@ -51,6 +52,9 @@ Eigen::Vector3d resize_point(const features::Shape& source, const features::Shap
 
 /// The nearest point of a surface shape (plane, cylinder, sphere, cone) to p; p for other shapes.
 Eigen::Vector3d project_onto(const features::Shape& s, const Eigen::Vector3d& p);
+
+/// True when every number of the shape is finite.
+bool finite_shape(const features::Shape& s);
 
 /// The direction a constraint on this shape talks about: plane normal, cylinder/cone axis, line
 /// direction, circle/arc normal. Zero for spheres and freeform.

@@ -107,12 +107,12 @@ TEST(EditInterpreter, VectorWhereNumber) {
   expect_script_error("let h = select cylinder\nset h.radius = [1, 2, 3]\n", "2:16", "must be a number, not a vector");
 }
 TEST(EditInterpreter, NumberWhereVector) { expect_script_error("let h = select cylinder\nmove h by 3\n", "2:11", "must be a vector"); }
-TEST(EditInterpreter, DivisionByZero) { expect_script_error("param a = 1 / (2 - 2)\n", "1:11", "division by zero"); }
+TEST(EditInterpreter, DivisionByZero) { expect_script_error("param a = 1 / (2 - 2)\n", "1:13", "division by zero"); }
 TEST(EditInterpreter, EmptySelectionEdit) {
   expect_script_error("let s = select sphere\nset s.radius = 2\n", "2:5", "selects no feature");
 }
 TEST(EditInterpreter, RadiusOfAPlane) {
-  expect_script_error("let t = select plane\nset t.radius = 2\n", "2:1", "only cylinders, spheres, circles and arcs have a radius");
+  expect_script_error("let t = select plane\nset t.radius = 2\n", "2:5", "only cylinders, spheres, circles and arcs have a radius");
 }
 TEST(EditInterpreter, DifferingPropertyInExpression) {
   expect_script_error("let c = select cylinder\nlet x = c.radius\n", "2:9", "differ");
@@ -137,6 +137,50 @@ TEST(EditInterpreter, FailedConstraintAssert) {
 TEST(EditInterpreter, ConflictWithLockedFeature) {
   expect_failure("let t = select plane where normal ~ +z\nlet b = select plane where normal ~ -z\nlock b\n"
                  "rotate t about [1, 0, 0] by 2 deg\n",
+                 "locked");
+}
+
+TEST(EditInterpreter, SetValueMustBeAnExpression) {
+  edit::ScriptOptions o;
+  o.overrides["d"] = "select plane";
+  try {
+    run("param d = 1\n", o);
+    FAIL() << "no error";
+  } catch (const edit::ScriptError& e) {
+    EXPECT_NE(std::string(e.what()).find("--set d=select plane:1:1"), std::string::npos) << e.what();
+  }
+  o.overrides["d"] = "4 5";
+  try {
+    run("param d = 1\n", o);
+    FAIL() << "no error";
+  } catch (const edit::ScriptError& e) {
+    EXPECT_NE(std::string(e.what()).find("--set d=4 5:1:3: expected end of the value"), std::string::npos) << e.what();
+  }
+}
+TEST(EditInterpreter, ZeroDirectionOfAPicker) {
+  expect_script_error("let t = select plane highest along [0, 0, 0]\n", "1:36", "zero vector");
+}
+TEST(EditInterpreter, HugeMoveIsRefusedNotWritten) {
+  expect_script_error("let t = select plane where normal ~ +z\nmove t by [1e308, 1e308, 0] * 10\n", "2:29", "not finite");
+  expect_failure("let t = select plane where normal ~ +z\nmove t by [1e308, 0, 0]\n", "folds or collapses");
+}
+TEST(EditInterpreter, FixedAngleAssertTakesItsValue) {
+  const auto r = run("let t = select plane where normal ~ +z\nlet s = select plane where normal ~ +x\n"
+                     "assert fixed_angle(t, s) = 90\n");
+  EXPECT_EQ(r.asserts, 1);
+}
+TEST(EditInterpreter, ASharedVertexMovesOnceWhenTwoSelectedFeaturesShareIt) {
+  // A hole and its rim circles moved together: the rims move by the vector, not twice it.
+  edit::Editor ed(plate().mesh, plate().features);
+  edit::run_script(edit::parse_script("let h = select feature where center ~ [22, 12, 4] +- 4.5 and radius ~ 3 +- 0.1\n"
+                                      "assert h.count >= 3\nmove h by [0, 0, 0.5]\n",
+                                      "t.s2e"),
+                   ed);
+  for (double d : ed.displacement()) EXPECT_TRUE(d == 0.0 || std::abs(d - 0.5) < 1e-12) << d;
+}
+TEST(EditInterpreter, LockedLineMakesAConflict) {
+  expect_failure("let h = select cylinder nearest [22, 12, 4]\nlet rim = select circle nearest [22, 12, 8]\nlock rim\n"
+                 "set h.radius = 3.5\n",
                  "locked");
 }
 

@@ -107,6 +107,13 @@ TEST(EditParser, MissingComparison) { expect_error("let a = select cylinder wher
 TEST(EditParser, UnclosedParenthesis) { expect_error("let a = select plane where (area > 3\n", "1:37", "expected ')'"); }
 TEST(EditParser, BadPicker) { expect_error("let a = select plane biggest\n", "1:22", "expected 'where', a picker"); }
 TEST(EditParser, CenterNeedsTolerance) { expect_error("let a = select sphere where center ~ [0, 0, 0]\n", "1:47", "expected '+-'"); }
+TEST(EditParser, NestingIsBounded) {
+  expect_error("let a = " + std::string(100000, '(') + "1\n", "1", "nested more than 256 levels deep");
+  std::string chain = "let a = 1";
+  for (int k = 0; k < 5000; ++k) chain += "+1";
+  expect_error(chain + "\n", "1", "more than 4096 terms");
+}
+TEST(EditParser, ColumnsCountCharacters) { expect_error("let a = 2 × 3 ±\n", "1:15", "expected end of line, found '+-'"); }
 TEST(EditParser, EmptyScriptIsValid) { EXPECT_TRUE(parse_script("# nothing\n\n", "t.s2e").statements.empty()); }
 
 }  // namespace

@@ -11,7 +11,7 @@
 ///   constrain KIND(NAME, NAME[, ...]) [= EXPR]
 ///   unconstrain KIND(NAME, NAME[, ...])  |  unconstrain NAME
 ///   lock NAME
-///   assert NAME.PROP COND-TAIL  |  assert KIND(NAME, NAME[, ...])
+///   assert NAME.PROP COND-TAIL  |  assert KIND(NAME, NAME[, ...]) [= EXPR]
 ///   export "PATH"
 ///
 /// TYPE: plane cylinder sphere cone line circle arc freeform patch curve feature (plural allowed).
@@ -111,6 +111,9 @@ struct Script {
 
 /// Parses a script. \throw ScriptError naming line, column, what was expected and what was found.
 Script parse_script(const std::string& text, const std::string& source);
+
+/// Parses one expression (a --set value). \throw ScriptError naming `source` and the column.
+ExprPtr parse_expression(const std::string& text, const std::string& source);
 
 /// The constraint kind names the language accepts (those of features.json).
 const std::vector<std::string>& constraint_names();
