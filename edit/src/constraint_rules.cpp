@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <nlohmann/json.hpp>
+
 namespace s2c::edit {
 
 using Eigen::Matrix3d;
@@ -53,9 +55,79 @@ Vector3d pivot_of(const Shape& b, const Vector3d& centre) {
 // b's direction turned to be parallel to a's, keeping its sense.
 Vector3d parallel_target(const Vector3d& a, const Vector3d& b) { return a.dot(b) >= 0.0 ? a : Vector3d(-a); }
 
+Vector3d reflect_point(const Mirror& m, const Vector3d& x) { return x - 2.0 * (x - m.point).dot(m.normal) * m.normal; }
+Vector3d reflect_dir(const Mirror& m, const Vector3d& d) { return d - 2.0 * d.dot(m.normal) * m.normal; }
+
+// The mirror image of a shape (directions as lines: their sense is not compared).
+Shape reflect(const Mirror& m, const Shape& s) {
+  Shape out = s;
+  out.point = reflect_point(m, s.point);
+  out.dir = reflect_dir(m, s.dir);
+  out.start = reflect_point(m, s.end);  // a reflection reverses the sense of an arc
+  out.end = reflect_point(m, s.start);
+  return out;
+}
+
+// How far b is from being a's mirror image: directions, then positions and sizes.
+ConstraintResidual mirror_residual(const Mirror& m, const Shape& a, const Shape& b) {
+  ConstraintResidual r;
+  if (a.type != b.type) return r;
+  const Shape img = reflect(m, a);
+  switch (a.type) {
+    case ShapeType::plane:
+      r.angle_deg = line_angle_deg(img.dir, b.dir);
+      r.length = std::abs((img.point - b.point).dot(b.dir.normalized()));
+      break;
+    case ShapeType::cylinder:
+      r.angle_deg = line_angle_deg(img.dir, b.dir);
+      r.length = std::max(distance_to_line(img.point, b.point, b.dir), std::abs(a.radius - b.radius));
+      break;
+    case ShapeType::cone:
+      r.angle_deg = std::max(line_angle_deg(img.dir, b.dir), std::abs(a.half_angle_deg - b.half_angle_deg));
+      r.length = (img.point - b.point).norm();
+      break;
+    case ShapeType::sphere: r.length = std::max((img.point - b.point).norm(), std::abs(a.radius - b.radius)); break;
+    case ShapeType::circle:
+    case ShapeType::arc:
+      r.angle_deg = line_angle_deg(img.dir, b.dir);
+      r.length = std::max((img.point - b.point).norm(), std::abs(a.radius - b.radius));
+      break;
+    default: return r;
+  }
+  r.checked = true;
+  return r;
+}
+
 }  // namespace
 
-ConstraintResidual pair_residual(ConstraintKind kind, std::optional<double> value, const Shape& a, const Shape& b) {
+ConstraintSpec spec_of(const features::Group& g) {
+  ConstraintSpec c;
+  c.kind = *g.constraint;
+  c.value = g.value;
+  if (auto it = g.attributes.find("mirror"); it != g.attributes.end()) {
+    const auto j = nlohmann::json::parse(it->second, nullptr, false);
+    if (j.is_object() && j.contains("point") && j.contains("normal") && j["point"].is_array() && j["normal"].is_array() &&
+        j["point"].size() == 3 && j["normal"].size() == 3) {
+      Mirror m;
+      bool ok = true;
+      for (int k = 0; k < 3; ++k) {
+        ok = ok && j["point"][k].is_number() && j["normal"][k].is_number();
+        if (!ok) break;
+        m.point[k] = j["point"][k].get<double>();
+        m.normal[k] = j["normal"][k].get<double>();
+      }
+      if (ok && m.point.allFinite() && m.normal.allFinite() && m.normal.norm() > 0.0) {
+        m.normal.normalize();
+        c.mirror = m;
+      }
+    }
+  }
+  return c;
+}
+
+ConstraintResidual pair_residual(const ConstraintSpec& c, const Shape& a, const Shape& b) {
+  const ConstraintKind kind = c.kind;
+  const std::optional<double>& value = c.value;
   ConstraintResidual r;
   const Vector3d da = direction_of(a), db = direction_of(b);
   const bool dirs = da.squaredNorm() > 0.0 && db.squaredNorm() > 0.0;
@@ -104,14 +176,17 @@ ConstraintResidual pair_residual(ConstraintKind kind, std::optional<double> valu
       r.angle_deg = line_angle_deg(da, db);
       r.length = std::max(distance_to_line(b.point, a.point, da), distance_to_line(line_end(b), a.point, da));
       break;
-    default: return r;  // connected (kept by the mesh), equal_angle and symmetric: not measured here
+    case ConstraintKind::symmetric:
+      return c.mirror ? mirror_residual(*c.mirror, a, b) : r;
+    default: return r;  // connected (kept by the mesh) and equal_angle (its fixed_angle groups): not measured here
   }
   r.checked = true;
   return r;
 }
 
-std::optional<ShapeMap> adjustment(ConstraintKind kind, std::optional<double> value, const Shape& a, const Shape& b,
-                                   const Vector3d& b_centre) {
+std::optional<ShapeMap> adjustment(const ConstraintSpec& c, const Shape& a, const Shape& b, const Vector3d& b_centre) {
+  const ConstraintKind kind = c.kind;
+  const std::optional<double>& value = c.value;
   const Vector3d da = direction_of(a), db = direction_of(b);
   const bool dirs = da.squaredNorm() > 0.0 && db.squaredNorm() > 0.0;
   const Vector3d pivot = pivot_of(b, b_centre);

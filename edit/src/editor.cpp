@@ -177,7 +177,7 @@ struct Editor::Impl {
     ConstraintResidual worst;
     const auto ms = members(gr);
     for (std::size_t k = 1; k < ms.size(); ++k) {
-      const ConstraintResidual r = pair_residual(*gr.constraint, gr.value, shape_of(ms[0]), shape_of(ms[k]));
+      const ConstraintResidual r = pair_residual(spec_of(gr), shape_of(ms[0]), shape_of(ms[k]));
       if (!r.checked) continue;
       worst.checked = true;
       worst.angle_deg = std::max(worst.angle_deg, r.angle_deg);
@@ -651,9 +651,10 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
   // A constraint is kept when its residual did not grow beyond the tolerances: on a scan the
   // constraints hold only to the detection tolerance, and an edit must not "repair" them all.
   auto kept = [&](const features::Group& gr, FeatureRef a, FeatureRef b) {
-    const ConstraintResidual after = pair_residual(*gr.constraint, gr.value, current(a), current(b));
+    const ConstraintSpec spec = spec_of(gr);
+    const ConstraintResidual after = pair_residual(spec, current(a), current(b));
     if (!after.checked) return true;
-    const ConstraintResidual before = pair_residual(*gr.constraint, gr.value, shape(a), shape(b));
+    const ConstraintResidual before = pair_residual(spec, shape(a), shape(b));
     return after.angle_deg <= before.angle_deg + opt.angle_tolerance_deg &&
            after.length <= before.length + opt.length_tolerance;
   };
@@ -665,13 +666,16 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
     if (f.kind != FeatureRef::Kind::patch) continue;
     for (int g : groups_of(f)) {
       const auto& gr = fs.groups[g];
+      // Mirror symmetry is found by the features stage, seldom designed: it does not drive
+      // propagation; when an edit breaks it, it is reported and dropped (see the end of run).
+      if (*gr.constraint == ConstraintKind::symmetric) continue;
       for (FeatureRef other : members(gr)) {
         if (other == f || other.kind != FeatureRef::Kind::patch) continue;
         // Greedy propagation stops at features the user edited; a feature propagation already
         // changed may change again for another constraint (a hole turned parallel, then resized).
         const bool user_edited = std::find(rep.edited.begin(), rep.edited.end(), other) != rep.edited.end();
         if (user_edited || adjusted[other] >= kMaxAdjustments || kept(gr, f, other)) continue;
-        const auto adj = adjustment(*gr.constraint, gr.value, current(f), current(other), centroid(other));
+        const auto adj = adjustment(spec_of(gr), current(f), current(other), centroid(other));
         if (!adj)
           throw ProcessingError(fmt::format(
               "constraint {} would no longer hold and {} cannot be adjusted to keep it: unconstrain it or edit "
@@ -692,13 +696,13 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
   }
   // Constraints among modified features must hold: propagation stopped at them.
   for (int g = 0; g < static_cast<int>(fs.groups.size()); ++g) {
-    if (!fs.groups[g].constraint) continue;
+    if (!fs.groups[g].constraint || *fs.groups[g].constraint == ConstraintKind::symmetric) continue;
     std::vector<FeatureRef> mod;
     for (FeatureRef f : members(fs.groups[g]))
       if (f.kind == FeatureRef::Kind::patch && new_shape.count(f)) mod.push_back(f);
     for (std::size_t k = 1; k < mod.size(); ++k) {
       if (kept(fs.groups[g], mod[0], mod[k])) continue;
-      const auto r = pair_residual(*fs.groups[g].constraint, fs.groups[g].value, new_shape[mod[0]], new_shape[mod[k]]);
+      const auto r = pair_residual(spec_of(fs.groups[g]), new_shape[mod[0]], new_shape[mod[k]]);
       throw ProcessingError(fmt::format("conflict: constraint {} between {} and {} cannot hold after the edit "
                                         "(residual {:.3g}°, {:.3g} mm); both are set by it",
                                         group_text(g), id(mod[0]), id(mod[k]), r.angle_deg, r.length));
@@ -863,8 +867,8 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
     bool involved = false;
     for (FeatureRef f : members(fs.groups[g])) involved = involved || touched.count(f);
     if (!involved) continue;
-    if (*fs.groups[g].constraint == ConstraintKind::symmetric) {
-      rep.broken.push_back(fmt::format("{} cannot be verified after the edit (mirror symmetry is not measured here)",
+    if (*fs.groups[g].constraint == ConstraintKind::symmetric && !spec_of(fs.groups[g]).mirror) {
+      rep.broken.push_back(fmt::format("{} cannot be verified after the edit (it names no mirror plane)",
                                        group_text(g)));
       drop.insert(g);
       continue;
@@ -933,10 +937,12 @@ ConstraintResidual Editor::residual(int g) const {
 EditReport Editor::constrain(ConstraintKind kind, const std::vector<FeatureRef>& ms, std::optional<double> value) {
   Impl& m = *impl_;
   if (ms.size() < 2) throw InvalidInput(fmt::format("constrain {} needs at least two features", features::constraint_name(kind)));
+  if (kind == ConstraintKind::symmetric)
+    throw InvalidInput("constrain symmetric(a, b) is not available: the script cannot give the mirror plane");
   if (kind == ConstraintKind::fixed_angle && !value)
     throw InvalidInput("constrain fixed_angle(a, b) needs a value: constrain fixed_angle(a, b) = 30");
   for (std::size_t k = 1; k < ms.size(); ++k) {
-    const auto r = pair_residual(kind, value, m.shape(ms[0]), m.shape(ms[k]));
+    const auto r = pair_residual({kind, value, {}}, m.shape(ms[0]), m.shape(ms[k]));
     if (!r.checked && kind != ConstraintKind::connected && kind != ConstraintKind::symmetric && kind != ConstraintKind::equal_angle)
       throw InvalidInput(fmt::format("{} does not apply to {} ({}) and {} ({})", features::constraint_name(kind), m.id(ms[0]),
                                      features::shape_name(m.shape(ms[0]).type), m.id(ms[k]),
@@ -945,9 +951,9 @@ EditReport Editor::constrain(ConstraintKind kind, const std::vector<FeatureRef>&
   // Enforce: adjust every member after the first, as propagation from the first would.
   std::vector<std::pair<FeatureRef, ShapeMap>> edits;
   for (std::size_t k = 1; k < ms.size(); ++k) {
-    const auto r = pair_residual(kind, value, m.shape(ms[0]), m.shape(ms[k]));
+    const auto r = pair_residual({kind, value, {}}, m.shape(ms[0]), m.shape(ms[k]));
     if (m.holds(r)) continue;
-    const auto adj = adjustment(kind, value, m.shape(ms[0]), m.shape(ms[k]), m.centroid(ms[k]));
+    const auto adj = adjustment({kind, value, {}}, m.shape(ms[0]), m.shape(ms[k]), m.centroid(ms[k]));
     if (!adj)
       throw ProcessingError(fmt::format("{}({}, {}) does not hold and {} cannot be adjusted to make it hold",
                                         features::constraint_name(kind), m.id(ms[0]), m.id(ms[k]), m.id(ms[k])));

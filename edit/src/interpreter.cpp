@@ -448,7 +448,7 @@ class Interpreter {
       std::optional<double> value;
       if (st.value) value = number(st.value, "the constraint value");
       for (std::size_t k = 1; k < s.size(); ++k) {
-        const auto r = pair_residual(kind, value, ed_.shape(s[0]), ed_.shape(s[k]));
+        const auto r = pair_residual({kind, value, {}}, ed_.shape(s[0]), ed_.shape(s[k]));
         if (!r.checked)
           fail(st.at, fmt::format("{} cannot be measured between {} and {}", st.constraint, ed_.id(s[0]), ed_.id(s[k])));
         if (!holds(r, o.angle_tolerance_deg, o.length_tolerance))

@@ -2,6 +2,7 @@
 // edit (independently of the features the edit updated), plus locality, rollback and CAD-readiness.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "edit_fixture.h"
@@ -60,6 +61,14 @@ TEST(Edit, PlateWidenOneHolePropagatesEqualRadius) {
   for (const auto& patch : ed.features().patches)
     if (patch.shape.type == ShapeType::cylinder && std::abs(patch.shape.radius - 4.0) < 1e-9) ++fours;
   EXPECT_EQ(fours, 4);
+  // Every hole widened alike keeps every mirror symmetry of the plate (measured, not assumed).
+  auto symmetric = [](const features::FeatureSet& f) {
+    return std::count_if(f.groups.begin(), f.groups.end(), [](const features::Group& g) {
+      return g.constraint && *g.constraint == features::ConstraintKind::symmetric;
+    });
+  };
+  EXPECT_GT(symmetric(p.features), 0);
+  EXPECT_EQ(symmetric(ed.features()), symmetric(p.features));
   expect_cad_ready(ed.mesh());
 }
 
@@ -112,6 +121,8 @@ TEST(Edit, PlateRotateTopPropagatesParallelToBottom) {
   const auto b = refit(ed.mesh(), on_primitive(p, "bottom"), ShapeType::plane);
   EXPECT_NEAR(axis_angle_deg(t.shape.dir, Eigen::Vector3d::UnitZ()), 2.0, kDeg);
   EXPECT_LT(axis_angle_deg(t.shape.dir, b.shape.dir), 0.01);  // target: constraint residual ≤ 0.01°
+  // Tilting the top about x breaks the mirror symmetry about y = 0: reported and dropped.
+  EXPECT_TRUE(std::any_of(r.broken.begin(), r.broken.end(), [](const std::string& m) { return m.find("symmetric") != std::string::npos; }));
   expect_cad_ready(ed.mesh());
 }
 
