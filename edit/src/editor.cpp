@@ -97,6 +97,13 @@ struct Editor::Impl {
     std::vector<int> free_patches, handles;
     std::unique_ptr<ArapSolver> solver;
   } cache;
+  // The last region found (dragging the same features finds the same one again).
+  struct RegionCache {
+    std::vector<int> free_patches, handles, unknowns, changed_faces;
+    std::vector<std::array<int, 3>> region_faces;
+    double reach = -1.0;
+    bool valid = false;
+  } region_cache;
 
   const Shape& shape(FeatureRef f) const {
     return f.kind == FeatureRef::Kind::patch ? fs.patches[f.index].shape : fs.lines[f.index].shape;
@@ -746,7 +753,17 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
     for (const auto& [f, s] : new_shape)
       if (f.kind == FeatureRef::Kind::patch)
         checked_faces.insert(checked_faces.end(), fs.patches[f.index].faces.begin(), fs.patches[f.index].faces.end());
-    unknowns = region_unknowns(free_set, target, reach, region_faces, checked_faces);
+    auto& rc = region_cache;
+    if (rc.valid && rc.reach == reach && rc.free_patches == free_patches && rc.handles == handles) {
+      unknowns = rc.unknowns;
+      region_faces = rc.region_faces;
+      checked_faces.insert(checked_faces.end(), rc.changed_faces.begin(), rc.changed_faces.end());
+    } else {
+      std::vector<int> changed;
+      unknowns = region_unknowns(free_set, target, reach, region_faces, changed);
+      checked_faces.insert(checked_faces.end(), changed.begin(), changed.end());
+      rc = {free_patches, handles, unknowns, std::move(changed), region_faces, reach, true};
+    }
     saved.clear();
     for (int v : handles) saved.emplace_back(v, pos[v]);
     for (int v : unknowns) saved.emplace_back(v, pos[v]);
@@ -919,7 +936,10 @@ void Editor::Impl::remove_groups(const std::set<int>& drop) {
 
 // ---- constraints ------------------------------------------------------------------------------
 
-void Editor::lock(FeatureRef f) { impl_->locks.insert(f); }
+void Editor::lock(FeatureRef f) {
+  impl_->locks.insert(f);
+  impl_->region_cache.valid = false;  // a locked line's vertices are no longer unknowns
+}
 bool Editor::locked(FeatureRef f) const { return impl_->locks.count(f) > 0; }
 
 std::vector<int> Editor::constraints_of(const std::vector<FeatureRef>& fs) const {
