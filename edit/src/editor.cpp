@@ -77,6 +77,9 @@ Vector3d face_normal(const std::vector<Vector3d>& p, const std::array<int, 3>& f
 
 }  // namespace
 
+// A patch whose fit rms is at most this is a CAD tessellation (its vertices lie on the surface).
+constexpr double kCleanRms = 1e-3;
+
 struct Editor::Impl {
   Mesh mesh;
   features::FeatureSet fs;
@@ -366,7 +369,21 @@ struct Editor::Impl {
       if (ring.size() < 8) continue;
       const features::Fit fit = refit(s.type, ring, false);
       if (!fit.ok) continue;
-      for (int v : inner[q]) pos[v] = project_onto(fit.shape, pos[v]) + offset(v) * features::surface_normal(fit.shape, pos[v]);
+      // On a scan only vertices whose faces lie along the surface move (within 30° of its normal):
+      // the steep faces of a rounded edge would fold if their corners moved along the normal.
+      const bool clean = fs.patches[q].rms <= kCleanRms;
+      auto along_surface = [&](int v) {
+        const Vector3d sn = features::surface_normal(s, old_pos(v));
+        for (int e = vf_start[v]; e < vf_start[v + 1]; ++e) {
+          const auto& t = faces[vf[e]];
+          const Vector3d n = (old_pos(t[1]) - old_pos(t[0])).cross(old_pos(t[2]) - old_pos(t[0]));
+          if (n.norm() == 0.0 || std::abs(n.normalized().dot(sn)) < std::cos(30.0 * M_PI / 180.0)) return false;
+        }
+        return true;
+      };
+      for (int v : inner[q])
+        if (clean || along_surface(v))
+          pos[v] = project_onto(fit.shape, pos[v]) + offset(v) * features::surface_normal(fit.shape, pos[v]);
     }
   }
   // The first face that folded over (its normal turned by more than 90° from where the edit
@@ -788,7 +805,12 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
       rep.arap_iterations = cache.solver->solve(pos, opt.arap_iterations, opt.arap_tolerance, reuse).iterations;
       step(rep.time.solve);
       std::unordered_map<int, Vector3d> before(saved.begin(), saved.end());
+      std::vector<Vector3d> solved;
+      for (int v : unknowns) solved.push_back(pos[v]);
       snap_patches(free_patches, unknowns, before);
+      // A snap that folds a triangle is undone: ARAP's own result stays.
+      if (first_folded(checked_faces, normals_before, turned) >= 0)
+        for (std::size_t k = 0; k < unknowns.size(); ++k) pos[unknowns[k]] = solved[k];
     }
     step(rep.time.snap);
     const int folded = first_folded(checked_faces, normals_before, turned);

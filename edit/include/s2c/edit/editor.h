@@ -16,8 +16,8 @@
 ///     cotangent weights), restricted as in paper §4.2: patches that share a vertex with the
 ///     modified features are free, every other vertex stays where it is (displacement exactly 0).
 ///     The sparse factorisation is cached and reused while the same region is edited again.
-///  4. Free analytic patches of a CAD tessellation go back exactly onto the shape their border
-///     spans, so planes stay planes.
+///  4. Free analytic patches go back onto the shape their border spans, each vertex keeping its
+///     offset from it: a CAD tessellation lands exactly on it, so planes stay planes.
 ///  5. The region is checked: a flipped or degenerate triangle is a ProcessingError.
 /// Low-level edits (move_vertices) "bubble up": only the features the vertices belong to change.
 ///
@@ -59,10 +59,10 @@ struct EditOptions {
   double length_tolerance = 1e-3;        ///< … and its length / position residual below this, mm
   bool propagate = true;                 ///< greedy constraint propagation
   /// Put a free analytic patch whose fit rms is at most this (mm) back onto the shape its border
-  /// spans, each vertex keeping its offset from the surface (a CAD tessellation lands exactly on
-  /// it: planes stay planes). < 0: never (ARAP's result stays). Not on scans by default: moving
-  /// the vertices of a rounded edge along the surface normal can fold its steep triangles.
-  double snap_max_rms = 1e-3;
+  /// spans, each vertex keeping its offset from the surface: a CAD tessellation lands exactly on
+  /// it (planes stay planes); on a scan only vertices whose faces lie along the surface move, and
+  /// a snap that would fold a triangle is undone. < 0: never (ARAP's result stays).
+  double snap_max_rms = 0.1;
   /// For comparison only (benchmarks): ARAP over every patch of the mesh instead of the 1-ring of
   /// the modified features (the handles are then the only constraints).
   bool whole_mesh = false;
