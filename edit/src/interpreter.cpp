@@ -376,6 +376,18 @@ class Interpreter {
         rep.edit = ed_.move(s, vector(st.value, "the displacement"));
         break;
       }
+      case Statement::Kind::move_vertex: {
+        const double index = number(st.axis, "the vertex index");
+        const int nv = static_cast<int>(ed_.mesh().n_vertices());
+        if (index != std::floor(index) || index < 0 || index >= nv)
+          fail(st.axis->at, fmt::format("vertex {} does not exist: the mesh has vertices 0 to {}", index, nv - 1));
+        const int v = static_cast<int>(index);
+        const Vector3d by = vector(st.value, "the displacement");
+        rep.selected = {fmt::format("vertex {}", v)};
+        rep.edit = ed_.move_vertices({v}, {to_eigen(ed_.mesh().point(OpenMesh::VertexHandle(v))) + by});
+        say_edit(rep.edit);
+        return;
+      }
       case Statement::Kind::rotate: {
         const Selection s = nonempty(st.name, st.name_at);
         rep.selected = ids(s);

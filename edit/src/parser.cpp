@@ -22,7 +22,7 @@ namespace {
 const std::set<std::string> kTypes = {"plane", "cylinder", "sphere", "cone",  "line",
                                       "circle", "arc",     "freeform", "patch", "curve", "feature"};
 const std::set<std::string> kNumericProps = {"radius", "area", "length", "half_angle", "count"};
-const std::set<std::string> kKeywords = {"param", "let",    "select", "where",       "set",    "move",   "rotate",
+const std::set<std::string> kKeywords = {"param", "let", "vertex",    "select", "where",       "set",    "move",   "rotate",
                                          "scale", "constrain", "unconstrain", "lock", "assert", "export", "by",
                                          "about", "at",     "and",    "or",          "not",    "adjacent", "to"};
 
@@ -140,6 +140,13 @@ class Parser {
       if (!is_word("radius") && !is_word("half_angle")) fail("'radius' or 'half_angle'");
       st.property = next().text;
       expect_symbol("=");
+      st.value = expr();
+    } else if (word == "move" && is_word("vertex")) {
+      // A low-level edit: the vertex moves, the patches holding it follow (bubbling, paper §4.1).
+      ++i_;
+      st.kind = Statement::Kind::move_vertex;
+      st.axis = expr();  // the vertex index
+      expect_word("by");
       st.value = expr();
     } else if (word == "move") {
       st.kind = Statement::Kind::move;

@@ -2,6 +2,8 @@
 // (each names file, line and column, or the statement for exit-3 failures).
 #include <gtest/gtest.h>
 
+#include <set>
+
 #include "edit_fixture.h"
 
 namespace s2c::test {
@@ -177,6 +179,30 @@ TEST(EditInterpreter, ASharedVertexMovesOnceWhenTwoSelectedFeaturesShareIt) {
                                       "t.s2e"),
                    ed);
   for (double d : ed.displacement()) EXPECT_TRUE(d == 0.0 || std::abs(d - 0.5) < 1e-12) << d;
+}
+TEST(EditInterpreter, VertexEditBubblesIntoThePatchesHoldingIt) {
+  // The plate's corner (30, 20, 8): top, side_xp and side_yp hold it and follow; nothing else moves.
+  const Mesh& m = plate().mesh;
+  int corner = -1;
+  for (auto v : m.vertices())
+    if ((to_eigen(m.point(v)) - Eigen::Vector3d(30, 20, 8)).norm() < 1e-9) corner = v.idx();
+  ASSERT_GE(corner, 0);
+  edit::Editor ed(plate().mesh, plate().features);
+  const auto r = edit::run_script(
+      edit::parse_script("move vertex " + std::to_string(corner) + " by [0, 0, 0.2]\n", "t.s2e"), ed);
+  ASSERT_EQ(r.statements.size(), 1u);
+  const auto d = ed.displacement();
+  EXPECT_NEAR(d[corner], 0.2, 1e-12);
+  std::set<int> held;
+  for (const auto& f : r.statements[0].edit.free)
+    for (int v : ed.vertices(f)) held.insert(v);
+  for (int v = 0; v < static_cast<int>(d.size()); ++v)
+    if (!held.count(v)) {
+      EXPECT_EQ(d[v], 0.0) << v;
+    }
+  EXPECT_GE(r.statements[0].edit.free.size(), 3u);
+  expect_script_error("move vertex 1e9 by [0, 0, 1]\n", "1:13", "does not exist");
+  expect_script_error("move vertex 1.5 by [0, 0, 1]\n", "1:13", "does not exist");
 }
 TEST(EditInterpreter, LockedLineMakesAConflict) {
   expect_failure("let h = select cylinder nearest [22, 12, 4]\nlet rim = select circle nearest [22, 12, 8]\nlock rim\n"

@@ -67,9 +67,11 @@ TEST(EditParser, ExtensionsParse) {
       "assert parallel(ring, low)\n"
       "assert holes.count == 4\n"
       "assert ring.normal ~ [0, 0, 1] +- 1\n"
-      "set holes.radius = r × 2 ÷ 2\n",
+      "set holes.radius = r × 2 ÷ 2\n"
+      "move vertex 12 by [0, 0, 0.1]\n",
       "t.s2e");
-  ASSERT_EQ(s.statements.size(), 17u);
+  ASSERT_EQ(s.statements.size(), 18u);
+  EXPECT_EQ(s.statements[17].kind, Statement::Kind::move_vertex);
   EXPECT_EQ(s.statements[2].selector.where->kind, Condition::Kind::any_of);
   EXPECT_EQ(s.statements[3].selector.where->kind, Condition::Kind::all_of);
   EXPECT_EQ(s.statements[3].selector.picker, Picker::largest);

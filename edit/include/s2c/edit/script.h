@@ -6,6 +6,7 @@
 ///   let NAME = select TYPE [where COND] [PICKER]   |   let NAME = EXPR
 ///   set NAME.radius|half_angle = EXPR
 ///   move NAME by VEC
+///   move vertex INDEX by VEC              (low-level: the patches holding the vertex follow)
 ///   rotate NAME about VEC by EXPR [deg] [at VEC]
 ///   scale NAME by EXPR [at VEC]
 ///   constrain KIND(NAME, NAME[, ...]) [= EXPR]
@@ -86,7 +87,7 @@ struct Selector {
 };
 
 struct Statement {
-  enum class Kind { param, let_select, let_value, set, move, rotate, scale, constrain, unconstrain, lock, check, export_mesh };
+  enum class Kind { param, let_select, let_value, set, move, move_vertex, rotate, scale, constrain, unconstrain, lock, check, export_mesh };
   Kind kind = Kind::param;
   Location at;
   std::string text;                  ///< the statement's source line, trimmed (for messages)
@@ -94,7 +95,7 @@ struct Statement {
   Location name_at;                  ///< where `name` was written
   std::string property;              ///< set: radius | half_angle; assert: the property tested
   ExprPtr value;                     ///< param/let/set value; move vector; rotate angle; scale factor; constrain value
-  ExprPtr axis;                      ///< rotate: axis direction
+  ExprPtr axis;                      ///< rotate: axis direction; move vertex: the vertex index
   ExprPtr pivot;                     ///< rotate/scale: `at` point (null: the feature's centre)
   Selector selector;                 ///< let_select
   std::string constraint;            ///< constrain / unconstrain / assert KIND(...): the kind name
