@@ -21,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "features_eval.h"
+#include "s2c/core/cli.h"
 #include "s2c/core/clock.h"
 #include "s2c/core/errors.h"
 #include "s2c/core/files.h"
@@ -283,17 +284,11 @@ int main(int argc, char** argv) {
   s->add_flag("--no-whole-mesh", no_peer, "Skip the whole-mesh ARAP comparison");
   s->add_option("--influence", influence, "EditOptions::influence of the restricted edit")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
-  try {
-    if (*r) return cmd_refit(edited, original, truth, pick, out);
-    return cmd_speed(part, sizes, steps, out, !no_peer, influence);
-  } catch (const InvalidInput& e) {
-    std::fprintf(stderr, "s2c-bench-edit: %s\n", e.what());
-    return 2;
-  } catch (const IoError& e) {
-    std::fprintf(stderr, "s2c-bench-edit: %s\n", e.what());
-    return 4;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "s2c-bench-edit: %s\n", e.what());
-    return 3;
-  }
+  s2c::CommonOptions common;
+  s2c::init_logging("s2c-bench-edit", common);
+  int rc = 0;
+  const int guarded = s2c::run_guarded([&] {
+    rc = *r ? cmd_refit(edited, original, truth, pick, out) : cmd_speed(part, sizes, steps, out, !no_peer, influence);
+  });
+  return guarded != 0 ? guarded : rc;
 }

@@ -33,7 +33,8 @@ namespace {
 // Vertex → features incidence in compressed rows.
 struct Incidence {
   std::vector<int> start, items;
-  void build(int n, const std::vector<std::vector<int>>& sets) {
+  template <class Sets>  // a vector of vertex lists: vector<int> per feature, array<int, 3> per face
+  void build(int n, const Sets& sets) {
     std::vector<int> count(n + 1, 0);
     for (const auto& s : sets)
       for (int v : s) ++count[v + 1];
@@ -89,7 +90,7 @@ struct Editor::Impl {
   std::vector<std::vector<int>> patch_verts, line_verts;
   Incidence vertex_patches, vertex_lines;
   std::vector<int> vv_start, vv;  // vertex → neighbouring vertices (compressed rows)
-  std::vector<int> vf_start, vf;  // vertex → incident faces (compressed rows)
+  Incidence vertex_faces;
   std::vector<int> face_patch;
   std::map<std::string, FeatureRef> by_id;
   std::set<FeatureRef> locks;
@@ -313,13 +314,12 @@ struct Editor::Impl {
     std::vector<char> kind(faces.size(), 0);  // 1 changed, 2 changed and in the energy
     std::vector<int> touched;
     auto visit = [&](int v, char k) {
-      for (int e = vf_start[v]; e < vf_start[v + 1]; ++e) {
-        const int f = vf[e];
+      vertex_faces.each(v, [&](int f) {
         const int q = face_patch[f];
-        if (q < 0 || !free_patch[q]) continue;
+        if (q < 0 || !free_patch[q]) return;
         if (kind[f] == 0) touched.push_back(f);
         kind[f] = std::max(kind[f], k);
-      }
+      });
     };
     for (int v : unknowns) visit(v, 2);
     for (const auto& [v, p] : target) visit(v, 1);
@@ -374,12 +374,13 @@ struct Editor::Impl {
       const bool clean = fs.patches[q].rms <= kCleanRms;
       auto along_surface = [&](int v) {
         const Vector3d sn = features::surface_normal(s, old_pos(v));
-        for (int e = vf_start[v]; e < vf_start[v + 1]; ++e) {
-          const auto& t = faces[vf[e]];
+        bool along = true;
+        vertex_faces.each(v, [&](int f) {
+          const auto& t = faces[f];
           const Vector3d n = (old_pos(t[1]) - old_pos(t[0])).cross(old_pos(t[2]) - old_pos(t[0]));
-          if (n.norm() == 0.0 || std::abs(n.normalized().dot(sn)) < std::cos(30.0 * M_PI / 180.0)) return false;
-        }
-        return true;
+          along = along && n.norm() > 0.0 && std::abs(n.normalized().dot(sn)) >= std::cos(30.0 * M_PI / 180.0);
+        });
+        return along;
       };
       for (int v : inner[q])
         if (clean || along_surface(v))
@@ -454,6 +455,7 @@ Editor::Editor(Mesh mesh, features::FeatureSet fs, EditOptions options) : impl_(
   }
   m.vertex_patches.build(nv, m.patch_verts);
   m.vertex_lines.build(nv, m.line_verts);
+  m.vertex_faces.build(nv, m.faces);
   {
     std::vector<std::vector<int>> nb(nv);
     for (const auto& t : m.faces)
@@ -469,14 +471,6 @@ Editor::Editor(Mesh mesh, features::FeatureSet fs, EditOptions options) : impl_(
     }
     m.vv.reserve(m.vv_start[nv]);
     for (const auto& n : nb) m.vv.insert(m.vv.end(), n.begin(), n.end());
-    m.vf_start.assign(nv + 1, 0);
-    for (const auto& t : m.faces)
-      for (int v : t) ++m.vf_start[v + 1];
-    for (int v = 0; v < nv; ++v) m.vf_start[v + 1] += m.vf_start[v];
-    m.vf.resize(m.vf_start[nv]);
-    std::vector<int> fill(m.vf_start.begin(), m.vf_start.end() - 1);
-    for (int f = 0; f < nf; ++f)
-      for (int v : m.faces[f]) m.vf[fill[v]++] = f;
   }
   const Bounds b = bounds(m.mesh);
   m.diagonal = std::max(b.diagonal(), 1e-9);

@@ -43,10 +43,16 @@ std::vector<Token> tokenize(const std::string& text, const std::string& source) 
   int line = 1;
   std::size_t line_start = 0;
   std::size_t i = 0;
-  // Columns count characters, not bytes (UTF-8 continuation bytes are skipped).
+  // Columns count characters, not bytes (UTF-8 continuation bytes are skipped); counted on from
+  // the last position asked for, so a long line costs its length once.
+  std::size_t counted = 0;
+  int column = 1;
   auto here = [&] {
-    int column = 1;
-    for (std::size_t k = line_start; k < i; ++k) column += (static_cast<unsigned char>(text[k]) & 0xC0) != 0x80;
+    if (counted < line_start) {
+      counted = line_start;
+      column = 1;
+    }
+    for (; counted < i; ++counted) column += (static_cast<unsigned char>(text[counted]) & 0xC0) != 0x80;
     return Location{line, column};
   };
   while (i < text.size()) {

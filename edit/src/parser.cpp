@@ -277,32 +277,22 @@ class Parser {
 
   ConditionPtr condition() {
     Deeper guard(*this);
-    ConditionPtr left = conjunction();
-    if (!is_word("or")) return left;
-    auto c = std::make_shared<Condition>();
-    c->kind = Condition::Kind::any_of;
-    c->at = left->at;
-    c->children.push_back(left);
-    int n = 0;
-    while (is_word("or")) {
-      ++i_;
-      count_chain(n);
-      c->children.push_back(conjunction());
-    }
-    return c;
+    return chain("or", Condition::Kind::any_of, &Parser::conjunction);
   }
-  ConditionPtr conjunction() {
-    ConditionPtr left = unary_condition();
-    if (!is_word("and")) return left;
+  ConditionPtr conjunction() { return chain("and", Condition::Kind::all_of, &Parser::unary_condition); }
+  // OPERAND (WORD OPERAND)*: one node holding every operand, or the operand alone.
+  ConditionPtr chain(const char* word, Condition::Kind kind, ConditionPtr (Parser::*operand)()) {
+    ConditionPtr left = (this->*operand)();
+    if (!is_word(word)) return left;
     auto c = std::make_shared<Condition>();
-    c->kind = Condition::Kind::all_of;
+    c->kind = kind;
     c->at = left->at;
     c->children.push_back(left);
     int n = 0;
-    while (is_word("and")) {
+    while (is_word(word)) {
       ++i_;
       count_chain(n);
-      c->children.push_back(unary_condition());
+      c->children.push_back((this->*operand)());
     }
     return c;
   }
