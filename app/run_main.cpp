@@ -17,12 +17,23 @@ int main(int argc, char** argv) {
       "manifest.json records each stage's command, input/output hashes, timings and status.\n"
       "Re-running skips stages whose inputs and options are unchanged; a failed stage stops the run\n"
       "and keeps earlier outputs. Stages not in this build are reported and skipped.\n"
-      "Example: scan2cad run fixtures/scans/plate --out out",
+      "With --from, a recording is made first (the acquire stage) into DIR/stream.\n"
+      "Examples: scan2cad run fixtures/scans/plate --out out\n"
+      "          scan2cad run --from v4l2:/dev/video2 --calibration cam.yaml --frames 300 --out out",
       "scan2cad-run"};
   s2c::CommonOptions common;
   s2c::app::RunOptions o;
   std::string input, out, edit, reference;
-  app.add_option("INPUT", input, "Stream directory, point cloud (.ply .pcd) or mesh (.ply .stl .obj .off)")->required();
+  auto* input_opt = app.add_option("INPUT", input, "Stream directory, point cloud (.ply .pcd) or mesh (.ply .stl .obj .off)");
+  auto* from_opt = app.add_option("--from", o.acquire.from,
+                                  "Record first with `scan2cad acquire` (v4l2:/dev/videoN | usb:VID:PID | replay:DIR) "
+                                  "into DIR/stream, then run on the recording")
+                       ->excludes(input_opt);
+  input_opt->excludes(from_opt);
+  app.add_option("--calibration", o.acquire.calibration, "With --from a live device: its calibration (docs/acquire.md)")
+      ->needs(from_opt);
+  app.add_option("--frames", o.acquire.frames, "With --from: frames to record (0 = until the source ends or Ctrl-C)")
+      ->needs(from_opt);
   app.add_option("--out", out, "Output directory (created if missing)")->required();
   app.add_option("--edit", edit, "Edit script (.s2e) to apply to the repaired mesh");
   app.add_option("--reference", reference, "The true part, for a deviation map in the report");
@@ -30,10 +41,14 @@ int main(int argc, char** argv) {
   s2c::add_common_options(app, common);
   if (int rc = s2c::parse_command_line(app, argc, argv); rc >= 0) return rc;
   s2c::init_logging("scan2cad-run", common);
+  if (input.empty() && o.acquire.from.empty()) {
+    spdlog::error("give INPUT (a stream, cloud or mesh) or --from SOURCE to record one; see --help");
+    return s2c::kExitBadInput;
+  }
 
   int stage_rc = 0;
   const int rc = s2c::run_guarded([&] {
-    o.input = input;
+    o.input = o.acquire.from.empty() ? fs::path(input) : fs::path(out) / "stream";
     o.out_dir = out;
     o.edit_script = edit;
     o.reference = reference;

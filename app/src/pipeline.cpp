@@ -101,6 +101,19 @@ std::vector<Stage> plan(const RunOptions& o, InputKind kind, fs::path& final_mes
     stages.push_back(std::move(s));
     return available(stages.back().executable);
   };
+  if (!o.acquire.from.empty()) {
+    Stage s{"acquire", "scan2cad-acquire", {"--from", o.acquire.from, "--out", o.input.string()}, {}, {o.input}, {}};
+    if (!o.acquire.calibration.empty()) {
+      s.args.insert(s.args.end(), {"--calibration", o.acquire.calibration.string()});
+      s.inputs.push_back(o.acquire.calibration);
+    }
+    if (o.acquire.frames) s.args.insert(s.args.end(), {"--frames", std::to_string(o.acquire.frames)});
+    // A replay's input is its stream; a live device has none: its recording, once made, is kept
+    // and re-used by re-runs (--force records again).
+    const std::string replay = "replay:";
+    if (o.acquire.from.rfind(replay, 0) == 0) s.inputs.push_back(o.acquire.from.substr(replay.size()));
+    add(std::move(s));
+  }
   fs::path mesh = kind == InputKind::mesh ? o.input : fs::path();
   if (kind != InputKind::mesh) {
     if (add({"reconstruct", "scan2cad-reconstruct",
@@ -158,7 +171,7 @@ InputKind classify_input(const fs::path& in) {
 }
 
 RunResult run_pipeline(const RunOptions& o) {
-  const InputKind kind = classify_input(o.input);
+  const InputKind kind = o.acquire.from.empty() ? classify_input(o.input) : InputKind::stream;
   if (!o.edit_script.empty() && !fs::exists(o.edit_script))
     throw InvalidInput(fmt::format("{}: edit script not found", o.edit_script.string()));
   if (fs::exists(o.out_dir) && !fs::is_directory(o.out_dir))
@@ -183,7 +196,8 @@ RunResult run_pipeline(const RunOptions& o) {
   std::vector<Stage> stages = plan(o, kind, result.final_mesh);
   json manifest = {{"format", "scan2cad.manifest/1"},
                    {"version", kVersion},
-                   {"input", {{"path", o.input.string()}, {"sha256", hash_path(o.input)},
+                   {"input", {{"path", o.acquire.from.empty() ? o.input.string() : o.acquire.from},
+                              {"sha256", o.acquire.from.empty() ? hash_path(o.input) : std::string()},
                               {"kind", kind == InputKind::stream ? "stream" : kind == InputKind::cloud ? "cloud" : "mesh"}}},
                    {"stages", json::array()}};
   auto save = [&] { write_file_atomic(manifest_path, manifest.dump(2) + "\n"); };
@@ -221,8 +235,9 @@ RunResult run_pipeline(const RunOptions& o) {
       spdlog::info("[{}/{}] {}: up to date", index, with_check.size(), s.name);
     } else {
       spdlog::info("[{}/{}] {}: running {}", index, with_check.size(), s.name, s.executable);
-      // A stale output must never survive a re-run that fails.
-      for (const auto& out : s.outputs) fs::remove(out);
+      // A stale output must never survive a re-run that fails. (The recording folder is the
+      // pipeline's own: the recorder refuses to write into anything but an empty folder.)
+      for (const auto& out : s.outputs) fs::remove_all(out);
       const auto t0 = std::chrono::steady_clock::now();
       sr.exit_code = spawn_and_wait(argv, s.stdout_to);
       sr.seconds = seconds_since(t0);

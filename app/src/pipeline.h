@@ -2,6 +2,7 @@
 // The `scan2cad run` driver: plans the stages that apply to an input, runs each as a child
 // process, and keeps manifest.json so that re-runs skip stages whose inputs, options and
 // outputs are unchanged.
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -10,8 +11,16 @@ namespace s2c::app {
 
 enum class InputKind { stream, cloud, mesh };
 
+/// `--from SPEC`: record first (the acquire stage, into OUT/stream), then run on the recording.
+struct AcquireStage {
+  std::string from;                   // v4l2:/dev/videoN | usb:VID:PID | replay:DIR; empty: no acquire stage
+  std::filesystem::path calibration;  // live devices
+  std::uint64_t frames = 0;           // 0: until the source ends (replay) or Ctrl-C
+};
+
 struct RunOptions {
-  std::filesystem::path input, out_dir;
+  std::filesystem::path input, out_dir;  // input is OUT/stream when acquire.from is set
+  AcquireStage acquire;
   std::filesystem::path edit_script;  // empty: no edit stage
   std::filesystem::path reference;    // empty: no deviation map
   std::filesystem::path bin_dir;      // where the scan2cad-* executables are

@@ -20,6 +20,7 @@ namespace s2c {
 namespace {
 
 constexpr const char* kFormat = "scan2cad.stream/1";
+constexpr int kPngCompression = 1;
 
 [[noreturn]] void bad(const fs::path& file, const std::string& what) {
   throw InvalidInput(fmt::format("{}: {}", file.string(), what));
@@ -56,27 +57,19 @@ cv::Mat need_matrix(const cv::FileStorage& fs, const fs::path& file, const char*
   return m;
 }
 
-StreamInfo read_info(const fs::path& file) {
-  if (!fs::exists(file)) bad(file, "missing: a stream directory needs stream.yaml (see docs/formats.md)");
+cv::FileStorage open_yaml(const fs::path& file, const char* what) {
+  if (!fs::exists(file)) bad(file, fmt::format("missing: {}", what));
   cv::FileStorage fs;
   try {
     if (!fs.open(file.string(), cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML)) bad(file, "cannot be parsed as YAML");
   } catch (const cv::Exception& e) {
     bad(file, fmt::format("malformed YAML: {}", e.err));
   }
-  StreamInfo info;
-  const std::string format = (std::string)need(fs, file, "format");
-  if (format != kFormat) bad(file, fmt::format("format is '{}', expected '{}'", format, kFormat));
-  const std::string sensor = (std::string)need(fs, file, "sensor");
-  if (sensor == "depth") info.sensor = Sensor::depth;
-  else if (sensor == "laser") info.sensor = Sensor::laser;
-  else bad(file, fmt::format("sensor is '{}', expected depth or laser", sensor));
-  if (!fs["device"].empty()) info.device = (std::string)fs["device"];
-  const double w = need_number(fs, file, "width"), h = need_number(fs, file, "height");
-  if (w < 1 || h < 1 || w > 16384 || h > 16384 || w != std::floor(w) || h != std::floor(h))
-    bad(file, fmt::format("width/height {}x{} out of range (1..16384)", w, h));
-  info.width = static_cast<int>(w);
-  info.height = static_cast<int>(h);
+  return fs;
+}
+
+/// The optics every sensor shares: camera matrix, distortion, depth unit (and the laser's step).
+void read_optics(const cv::FileStorage& fs, const fs::path& file, StreamInfo& info) {
   info.depth_unit_mm = need_number(fs, file, "depth_unit_mm");
   if (info.depth_unit_mm <= 0) bad(file, "depth_unit_mm must be positive");
   cv::Mat K = need_matrix(fs, file, "camera_matrix", 3, 3);
@@ -86,12 +79,33 @@ StreamInfo read_info(const fs::path& file) {
     bad(file, "camera_matrix: focal lengths must be positive");
   cv::Mat D = need_matrix(fs, file, "dist_coeffs", 1, 5);
   for (int i = 0; i < 5; ++i) info.dist_coeffs[i] = D.at<double>(i);
-  info.pose_unit_mm = fs["pose_unit_mm"].empty() ? 1.0 : need_number(fs, file, "pose_unit_mm");
-  if (info.pose_unit_mm <= 0) bad(file, "pose_unit_mm must be positive");
   if (info.sensor == Sensor::laser) {
     info.profile_step_mm = need_number(fs, file, "profile_step_mm");
     if (info.profile_step_mm <= 0) bad(file, "profile_step_mm must be positive");
   }
+}
+
+int need_size(const cv::FileStorage& fs, const fs::path& file, const char* key) {
+  const double v = need_number(fs, file, key);
+  if (v < 1 || v > 16384 || v != std::floor(v)) bad(file, fmt::format("key '{}' = {} out of range (1..16384)", key, v));
+  return static_cast<int>(v);
+}
+
+StreamInfo read_info(const fs::path& file) {
+  cv::FileStorage fs = open_yaml(file, "a stream directory needs stream.yaml (see docs/formats.md)");
+  StreamInfo info;
+  const std::string format = (std::string)need(fs, file, "format");
+  if (format != kFormat) bad(file, fmt::format("format is '{}', expected '{}'", format, kFormat));
+  const std::string sensor = (std::string)need(fs, file, "sensor");
+  if (sensor == "depth") info.sensor = Sensor::depth;
+  else if (sensor == "laser") info.sensor = Sensor::laser;
+  else bad(file, fmt::format("sensor is '{}', expected depth or laser", sensor));
+  if (!fs["device"].empty()) info.device = (std::string)fs["device"];
+  info.width = need_size(fs, file, "width");
+  info.height = need_size(fs, file, "height");
+  read_optics(fs, file, info);
+  info.pose_unit_mm = fs["pose_unit_mm"].empty() ? 1.0 : need_number(fs, file, "pose_unit_mm");
+  if (info.pose_unit_mm <= 0) bad(file, "pose_unit_mm must be positive");
   return info;
 }
 
@@ -128,6 +142,20 @@ void for_each_record(const fs::path& file, F&& f) {
 }  // namespace
 
 const char* to_string(Sensor s) { return s == Sensor::depth ? "depth" : "laser"; }
+
+StreamInfo read_calibration(const fs::path& file, Sensor sensor) {
+  cv::FileStorage fs = open_yaml(file, "the calibration file does not exist");
+  StreamInfo info;
+  info.sensor = sensor;
+  read_optics(fs, file, info);
+  if (sensor == Sensor::laser) {
+    info.width = need_size(fs, file, "width");  // the fan's rays: columns of a sweep
+  } else if (!fs["image_width"].empty() || !fs["image_height"].empty()) {
+    info.width = need_size(fs, file, "image_width");
+    info.height = need_size(fs, file, "image_height");
+  }
+  return info;
+}
 
 Stream read_stream(const fs::path& dir) {
   if (!fs::is_directory(dir)) throw InvalidInput(fmt::format("{}: not a stream directory", dir.string()));
@@ -202,12 +230,53 @@ DepthImage read_frame(const Stream& s, std::size_t i) {
   return d;
 }
 
-void write_depth_png(const fs::path& path, const DepthImage& d) {
+std::string encode_depth_png(const DepthImage& d) {
   cv::Mat img(d.height, d.width, CV_16UC1, const_cast<std::uint16_t*>(d.data.data()));
-  AtomicFile out(path);
-  if (!cv::imwrite(out.temp_path().string(), img, {cv::IMWRITE_PNG_COMPRESSION, 9}))
-    throw IoError(fmt::format("{}: cannot write PNG", path.string()));
-  out.commit();
+  std::vector<std::uint8_t> bytes;
+  // Level 1: depth images compress nearly as well as at 9 (runs of zeros, smooth surfaces),
+  // several times faster, which a recorder at 30 fps needs.
+  if (!cv::imencode(".png", img, bytes, {cv::IMWRITE_PNG_COMPRESSION, kPngCompression}))
+    throw IoError("cannot encode a depth frame as PNG");
+  return std::string(bytes.begin(), bytes.end());
+}
+
+std::string index_line(const StreamFrame& f) { return fmt::format("{:.6f} {}\n", f.timestamp, f.file); }
+
+std::string pose_line(const StreamPose& p, double pose_unit_mm) {
+  Eigen::Quaterniond q(p.camera_to_world.linear());
+  q.normalize();
+  // q and −q are one rotation: always print the same one (w > 0, or the first non-zero component
+  // positive), and no "−0", so that a pose read and written again gives the same line.
+  Eigen::Vector4d c(q.w(), q.x(), q.y(), q.z());
+  for (int i = 0; i < 4; ++i) c[i] = std::abs(c[i]) < 5e-13 ? 0.0 : c[i];
+  for (int i = 0; i < 4; ++i)
+    if (c[i] != 0) {
+      if (c[i] < 0) c = -c;
+      break;
+    }
+  q = Eigen::Quaterniond(c[0], c[1], c[2], c[3]);
+  Eigen::Vector3d t = p.camera_to_world.translation() / pose_unit_mm;
+  for (int i = 0; i < 3; ++i) t[i] = std::abs(t[i]) < 5e-10 ? 0.0 : t[i];
+  return fmt::format("{:.6f} {:.9f} {:.9f} {:.9f} {:.12f} {:.12f} {:.12f} {:.12f}\n", p.timestamp, t.x(), t.y(), t.z(),
+                     q.x(), q.y(), q.z(), q.w());
+}
+
+void write_depth_png(const fs::path& path, const DepthImage& d) {
+  write_file_atomic(path, encode_depth_png(d));
+}
+
+void write_stream_yaml(const fs::path& file, const StreamInfo& info) {
+  cv::FileStorage fsw(file.string(), cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
+  if (!fsw.isOpened()) throw IoError(fmt::format("{}: cannot write", file.string()));
+  fsw << "format" << kFormat << "sensor" << to_string(info.sensor) << "device" << info.device;
+  fsw << "width" << info.width << "height" << info.height << "depth_unit_mm" << info.depth_unit_mm;
+  cv::Mat K(3, 3, CV_64F), D(1, 5, CV_64F);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) K.at<double>(r, c) = info.camera_matrix(r, c);
+  for (int i = 0; i < 5; ++i) D.at<double>(i) = info.dist_coeffs[i];
+  fsw << "camera_matrix" << K << "dist_coeffs" << D << "pose_unit_mm" << info.pose_unit_mm;
+  if (info.sensor == Sensor::laser) fsw << "profile_step_mm" << info.profile_step_mm;
+  fsw.release();
 }
 
 Deprojector::Deprojector(const StreamInfo& info) : info_(info) {
@@ -304,29 +373,13 @@ void StreamWriter::add_frame(double timestamp, const DepthImage& depth, const st
 }
 
 void StreamWriter::finish() {
-  {
-    cv::FileStorage fsw((temp_ / "stream.yaml").string(), cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
-    fsw << "format" << kFormat << "sensor" << to_string(info_.sensor) << "device" << info_.device;
-    fsw << "width" << info_.width << "height" << info_.height << "depth_unit_mm" << info_.depth_unit_mm;
-    cv::Mat K(3, 3, CV_64F), D(1, 5, CV_64F);
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) K.at<double>(r, c) = info_.camera_matrix(r, c);
-    for (int i = 0; i < 5; ++i) D.at<double>(i) = info_.dist_coeffs[i];
-    fsw << "camera_matrix" << K << "dist_coeffs" << D << "pose_unit_mm" << info_.pose_unit_mm;
-    if (info_.sensor == Sensor::laser) fsw << "profile_step_mm" << info_.profile_step_mm;
-    fsw.release();
-  }
-  std::string index = "# scan2cad stream: timestamp filename\n";
-  for (const auto& f : frames_) index += fmt::format("{:.6f} {}\n", f.timestamp, f.file);
+  write_stream_yaml(temp_ / "stream.yaml", info_);
+  std::string index = kIndexHeader;
+  for (const auto& f : frames_) index += index_line(f);
   write_file_atomic(temp_ / "depth.txt", index);
   if (!poses_.empty()) {
-    std::string poses = "# timestamp tx ty tz qx qy qz qw (camera-to-world, translation in pose_unit_mm)\n";
-    for (const auto& p : poses_) {
-      const Eigen::Quaterniond q(p.camera_to_world.linear());
-      const Eigen::Vector3d t = p.camera_to_world.translation() / info_.pose_unit_mm;
-      poses += fmt::format("{:.6f} {:.9f} {:.9f} {:.9f} {:.12f} {:.12f} {:.12f} {:.12f}\n", p.timestamp, t.x(), t.y(),
-                           t.z(), q.x(), q.y(), q.z(), q.w());
-    }
+    std::string poses = kPosesHeader;
+    for (const auto& p : poses_) poses += pose_line(p, info_.pose_unit_mm);
     write_file_atomic(temp_ / "poses.txt", poses);
   }
   // Swap the finished folder into place; the old stream (if any) goes only after that succeeded.

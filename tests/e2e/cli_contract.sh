@@ -46,6 +46,32 @@ expect_rc 2 "repair to an unknown format" "$bin/scan2cad" repair "$src/fixtures/
 expect_rc 2 "repair onto its own input" "$bin/scan2cad" repair "$work/bad.off" -o "$work/bad.off"
 expect_rc 2 "repair with --voxel and --resolution" "$bin/scan2cad" repair "$src/fixtures/parts/plate.stl" -o "$work/rep.ply" \
   --voxel 0.5 --resolution 100
+# acquire: live devices need a calibration; bad sources and corrupt replays exit 2, leave nothing.
+expect_rc 2 "acquire without --calibration" "$bin/scan2cad" acquire --from v4l2:/dev/video0 --out "$work/acq"
+grep -q "calibration" "$work/stderr" || fail "acquire does not ask for --calibration"
+expect_rc 2 "acquire from an unknown source" "$bin/scan2cad" acquire --from camera0 --out "$work/acq"
+grep -q "v4l2:/dev/videoN" "$work/stderr" || fail "acquire does not list the source forms"
+printf '%%YAML:1.0\n---\ncamera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 525., 0., 319.5, 0., 525., 239.5, 0., 0., 1. ]\ndist_coeffs: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n   data: [ 0., 0., 0., 0., 0. ]\n' > "$work/cam_nounit.yaml"
+expect_rc 2 "acquire with a calibration missing a key" "$bin/scan2cad" acquire --from v4l2:/dev/video0 \
+  --calibration "$work/cam_nounit.yaml" --out "$work/acq"
+grep -q "depth_unit_mm" "$work/stderr" || fail "acquire does not name the missing calibration key"
+printf 'depth_unit_mm: 1.\n' >> "$work/cam_nounit.yaml"
+expect_rc 4 "acquire from a camera that is not there" "$bin/scan2cad" acquire --from v4l2:/dev/video-s2c-none \
+  --calibration "$work/cam_nounit.yaml" --out "$work/acq"
+grep -q "no such device" "$work/stderr" || fail "acquire does not say the camera is missing"
+[[ ! -e "$work/acq" ]] || fail "acquire left output when the device was missing"
+expect_rc 0 "acquire a replay" "$bin/scan2cad" acquire --from "replay:$src/fixtures/scans/plate" --out "$work/acq" --frames 3
+[[ $(grep -vc '^#' "$work/acq/depth.txt") == 3 ]] || fail "acquire --frames 3 did not record 3 frames"
+expect_rc 2 "acquire into a folder that holds something" "$bin/scan2cad" acquire --from "replay:$src/fixtures/scans/plate" \
+  --out "$work/acq"
+[[ $(grep -vc '^#' "$work/acq/depth.txt") == 3 ]] || fail "acquire overwrote an existing recording"
+rm -rf "$work/acq" "$work/corrupt"; cp -r "$src/fixtures/scans/plate" "$work/corrupt"
+head -c 500 "$src/fixtures/scans/plate/depth/000004.png" > "$work/corrupt/depth/000004.png"
+expect_rc 2 "acquire a replay with a corrupt frame" "$bin/scan2cad" acquire --from "replay:$work/corrupt" --out "$work/acq"
+grep -q "000004.png" "$work/stderr" || fail "acquire does not name the corrupt frame"
+[[ ! -e "$work/acq" ]] || fail "acquire left a partial recording of a corrupt replay"
+expect_rc 2 "run with both INPUT and --from" "$bin/scan2cad" run "$src/fixtures/scans/plate" --from replay:x --out "$work/r"
+
 # A mesh that cannot become CAD-ready under the asked strategy: exit 3, report written, no mesh.
 printf 'OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n' > "$work/tri.off"
 expect_rc 3 "repair --strategy surface --holes none on an open triangle" "$bin/scan2cad" repair "$work/tri.off" \

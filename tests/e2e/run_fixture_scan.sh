@@ -5,9 +5,13 @@ bin="$1"; src="$2"; work="$3"
 rm -rf "$work"; mkdir -p "$work"
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
-"$bin/scan2cad" run "$src/fixtures/scans/plate" --out "$work/out" --quiet || fail "run exited $?"
+# The bundled scan is replayed through the acquire stage (as a live capture would be recorded),
+# then every stage runs on the recording.
+"$bin/scan2cad" run --from "replay:$src/fixtures/scans/plate" --out "$work/out" --quiet || fail "run exited $?"
+[[ $(grep -vc '^#' "$work/out/stream/depth.txt") == $(grep -vc '^#' "$src/fixtures/scans/plate/depth.txt") ]] \
+  || fail "the recorded stream does not hold every frame of the replay"
 for f in manifest.json cloud.ply mesh.ply repaired.ply features.json segments.ply check.json \
-         reports/reconstruct.json reports/repair.json reports/features.json; do
+         reports/acquire.json reports/reconstruct.json reports/repair.json reports/features.json; do
   [[ -s "$work/out/$f" ]] || fail "missing $f"
 done
 python3 - "$work/out" <<'PY'
@@ -15,6 +19,7 @@ import json, sys, os
 out = sys.argv[1]
 m = json.load(open(os.path.join(out, "manifest.json")))
 st = {s["name"]: s for s in m["stages"]}
+assert st["acquire"]["status"] == "ok", st["acquire"]
 assert st["reconstruct"]["status"] == "ok", st["reconstruct"]
 assert st["repair"]["status"] == "ok", st["repair"]
 assert st["features"]["status"] == "ok", st["features"]
@@ -60,7 +65,7 @@ assert e["line_f1"] >= 0.9, e
 assert e["constraint_recall"] >= 0.9, e
 PY
 # Re-run: everything up to date.
-"$bin/scan2cad" run "$src/fixtures/scans/plate" --out "$work/out" --quiet
+"$bin/scan2cad" run --from "replay:$src/fixtures/scans/plate" --out "$work/out" --quiet
 python3 - "$work/out" <<'PY'
 import json, sys, os
 m = json.load(open(os.path.join(sys.argv[1], "manifest.json")))
@@ -68,7 +73,7 @@ ran = [s["name"] for s in m["stages"] if s["status"] == "ok" and not s.get("skip
 assert not ran, f"re-run should skip every stage, ran {ran}"
 PY
 # The edit stage on the repaired scan: the earlier stages are up to date, edit and check run.
-"$bin/scan2cad" run "$src/fixtures/scans/plate" --out "$work/out" --edit "$src/fixtures/edits/plate_widen_holes.s2e" \
+"$bin/scan2cad" run --from "replay:$src/fixtures/scans/plate" --out "$work/out" --edit "$src/fixtures/edits/plate_widen_holes.s2e" \
   --quiet || fail "run --edit exited $?"
 for f in edited.ply edited.features.json reports/edit.json; do [[ -s "$work/out/$f" ]] || fail "missing $f"; done
 "$bin/s2c-bench-edit" refit "$work/out/edited.ply" "$work/out/repaired.ply" "$src/fixtures/parts/plate.truth.json" \
@@ -78,6 +83,7 @@ import json, sys, os
 out = sys.argv[1]
 m = json.load(open(os.path.join(out, "manifest.json")))
 st = {s["name"]: s for s in m["stages"]}
+assert st["acquire"]["status"] == "ok", st["acquire"]
 assert st["edit"]["status"] == "ok", st["edit"]
 ran = [s["name"] for s in m["stages"] if s["status"] == "ok" and not s.get("skipped")]
 assert ran == ["edit", "check"], ran

@@ -59,6 +59,12 @@ struct DepthImage {
 /// \throw InvalidInput naming the file, the line or key, and what is wrong.
 Stream read_stream(const std::filesystem::path& dir);
 
+/// Reads a live sensor's calibration (OpenCV YAML; docs/acquire.md): camera_matrix, dist_coeffs
+/// and depth_unit_mm; for a laser also width (fan rays) and profile_step_mm. image_width and
+/// image_height, when present, are the size the intrinsics belong to (0 otherwise).
+/// \throw InvalidInput naming the file and the missing or bad key.
+StreamInfo read_calibration(const std::filesystem::path& file, Sensor sensor);
+
 /// Reads frame `i`. \throw InvalidInput naming the frame file if it is missing, unreadable,
 ///        not 16-bit single channel, or of the wrong size.
 DepthImage read_frame(const Stream& stream, std::size_t i);
@@ -105,6 +111,18 @@ class StreamWriter {
   std::vector<StreamPose> poses_;
   bool finished_ = false;
 };
+
+/// The stream's 16-bit PNG bytes of a depth image: the same image always gives the same bytes,
+/// so a replayed and re-recorded stream is byte-identical to the original.
+std::string encode_depth_png(const DepthImage& depth);
+/// Writes stream.yaml for `info` (not atomically: callers write into a folder of their own).
+void write_stream_yaml(const std::filesystem::path& file, const StreamInfo& info);
+
+/// The lines of depth.txt and poses.txt, and their header comments.
+constexpr const char* kIndexHeader = "# scan2cad stream: timestamp filename\n";
+constexpr const char* kPosesHeader = "# timestamp tx ty tz qx qy qz qw (camera-to-world, translation in pose_unit_mm)\n";
+std::string index_line(const StreamFrame& frame);
+std::string pose_line(const StreamPose& pose, double pose_unit_mm);
 
 /// Writes a 16-bit single-channel PNG (atomically). \throw IoError
 void write_depth_png(const std::filesystem::path& path, const DepthImage& depth);
