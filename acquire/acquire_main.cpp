@@ -123,6 +123,7 @@ int main(int argc, char** argv) {
     report.add_time("capture", r.seconds);
     report.json()["frames_per_second"] = r.seconds > 0 ? st.frames / r.seconds : 0.0;
     report.json()["loop_ms_per_frame"] = st.frames ? 1e3 * st.busy_seconds / st.frames : 0.0;
+    report.json()["device_call_ms_per_frame"] = st.frames ? 1e3 * st.device_call_seconds / st.frames : 0.0;
     if (r.failure) report.json()["failure"] = *r.failure;
     report.write(common.report);
     if (r.failure) throw s2c::DeviceError(*r.failure);

@@ -102,6 +102,8 @@ json bench_live(double fps, int frames, const fs::path& tum_png, const fs::path&
           {"seconds", res.seconds},
           {"fps_achieved", res.record.kept / res.seconds},
           {"loop_ms_per_frame", 1e3 * st.busy_seconds / std::max<std::uint64_t>(1, st.frames)},
+          {"device_call_ms_per_frame", 1e3 * st.device_call_seconds / std::max<std::uint64_t>(1, st.frames)},
+          {"own_ms_per_frame", 1e3 * (st.busy_seconds - st.device_call_seconds) / std::max<std::uint64_t>(1, st.frames)},
           {"cpu_ms_per_frame", 1e3 * cpu / std::max<std::uint64_t>(1, res.record.kept)},
           {"dropped_by_device", cam.frames_dropped()},
           {"sequence_gaps", st.sequence_gaps},

@@ -279,10 +279,12 @@ class V4l2Source final : public FrameSource {
     v4l2_buffer b{};
     b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     b.memory = V4L2_MEMORY_MMAP;
+    const auto call_start = std::chrono::steady_clock::now();
     if (xioctl(fd_, VIDIOC_DQBUF, &b) < 0) {
       if (errno == EAGAIN) return std::nullopt;
       fail_ioctl("VIDIOC_DQBUF");
     }
+    stats_.device_call_seconds += seconds_since(call_start);
     if (b.index >= buffers_.size())
       throw DeviceFailure(DeviceFault::io, fmt::format("{}: driver returned buffer {} of {}", o_.device, b.index, buffers_.size()));
     const auto now = std::chrono::steady_clock::now();
@@ -302,7 +304,9 @@ class V4l2Source final : public FrameSource {
         dropped = true;
       }
     }
+    const auto requeue_start = std::chrono::steady_clock::now();
     queue(b.index);  // back to the driver at once: the copy above is ours
+    stats_.device_call_seconds += seconds_since(requeue_start);
     if (auto warning = drops_.count(dropped, now)) spdlog::warn("{}: {}", o_.device, *warning);
     if (!img) return std::nullopt;
     ++stats_.frames;

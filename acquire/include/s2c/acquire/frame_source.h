@@ -38,7 +38,8 @@ struct SourceStats {
   std::uint64_t dropped_error = 0;   ///< flagged bad by the device (V4L2_BUF_FLAG_ERROR, bad packet)
   std::uint64_t sequence_gaps = 0;   ///< frames (profiles) the device numbered but never delivered
   std::uint64_t stalls = 0;          ///< USB endpoint halts cleared
-  double busy_seconds = 0;           ///< time spent inside next() not waiting for the device
+  double busy_seconds = 0;           ///< time spent inside next() handling frames (not waiting for them)
+  double device_call_seconds = 0;    ///< of which inside the device's calls (V4L2 DQBUF/QBUF ioctls)
 };
 
 /// The life of a source: open() (find the device, negotiate), start() (stream), next() until it
