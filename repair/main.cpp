@@ -39,6 +39,11 @@ int main(int argc, char** argv) {
   app.add_option("--resolution", o.volumetric.resolution, "Volumetric cells along the longest side (instead of --voxel)")
       ->excludes(voxel);
   app.add_option("--band", o.volumetric.band, "Narrow band half width, voxels")->capture_default_str();
+  double max_memory_gb = 0;
+  app.add_option("--max-memory", max_memory_gb,
+                 "Memory the volumetric grid may use, GB (default: 80% of this machine's RAM); a finer grid is "
+                 "refused up front with the smallest --voxel that fits")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--interp", interp, "Marching Cubes edge point: vector (the VDF paper's closest point to the "
                  "segment between closest surface points) or linear (scalar distance baseline)")
       ->check(CLI::IsMember({"vector", "linear"}))->capture_default_str();
@@ -53,6 +58,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   s2c::add_common_options(app, common);
   if (int rc = s2c::parse_command_line(app, argc, argv); rc >= 0) return rc;
+  o.volumetric.max_memory = max_memory_gb * 1e9;
   s2c::init_logging("scan2cad-repair", common);
 
   return s2c::run_guarded([&] {

@@ -3,6 +3,7 @@
 # packages already present are skipped, apt-get update runs only when something is missing.
 #   scripts/install-deps.sh            product build + tests
 #   scripts/install-deps.sh --bench    also the optional peers the benchmarks compare against
+#   scripts/install-deps.sh --fuzz     also clang and its sanitizer/libFuzzer runtimes (fuzz/run.sh)
 set -euo pipefail
 
 pkgs=(
@@ -15,9 +16,13 @@ pkgs=(
   # independent checker used by the tests (CGAL's exact predicates); header-only
   libcgal-dev
 )
-if [[ "${1:-}" == "--bench" ]]; then
-  pkgs+=(python3-open3d libopenvdb-dev hyperfine)
-fi
+for arg in "$@"; do
+  case "$arg" in
+    --bench) pkgs+=(python3-open3d libopenvdb-dev hyperfine) ;;
+    --fuzz) pkgs+=(clang libclang-rt-14-dev) ;;
+    *) echo "install-deps: unknown option $arg (--bench, --fuzz)" >&2; exit 2 ;;
+  esac
+done
 
 missing=()
 for p in "${pkgs[@]}"; do

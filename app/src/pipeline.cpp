@@ -143,6 +143,19 @@ std::vector<Stage> plan(const RunOptions& o, InputKind kind, fs::path& final_mes
   return stages;
 }
 
+/// Temporary files of writes a killed run never finished (".NAME.tmp-XXXX.EXT", see AtomicFile;
+/// ".NAME.tmp-PID" folders of StreamWriter): never valid outputs, removed before a run.
+void remove_stale_temporaries(const fs::path& out_dir) {
+  for (const fs::path& dir : {out_dir, out_dir / "reports"}) {
+    std::error_code ec;
+    if (!fs::is_directory(dir, ec)) continue;
+    for (const auto& e : fs::directory_iterator(dir, ec)) {
+      const std::string name = e.path().filename().string();
+      if (name.size() > 1 && name[0] == '.' && name.find(".tmp-") != std::string::npos) fs::remove_all(e.path(), ec);
+    }
+  }
+}
+
 }  // namespace
 
 std::string hash_path(const fs::path& p) {
@@ -177,6 +190,7 @@ RunResult run_pipeline(const RunOptions& o) {
   if (fs::exists(o.out_dir) && !fs::is_directory(o.out_dir))
     throw InvalidInput(fmt::format("{}: --out exists and is not a directory", o.out_dir.string()));
   fs::create_directories(o.out_dir / "reports");
+  remove_stale_temporaries(o.out_dir);
 
   const fs::path manifest_path = o.out_dir / "manifest.json";
   json previous = json::object();

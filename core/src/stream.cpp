@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -200,8 +201,23 @@ std::optional<Eigen::Isometry3d> Stream::pose_of(std::size_t frame) const {
   return best->camera_to_world;
 }
 
+/// A PNG's size from its IHDR, read before decoding: a header claiming 100000 × 100000 pixels is
+/// refused instead of allocated. Non-PNG files (TIFF frames) return nothing.
+static std::optional<std::pair<std::uint32_t, std::uint32_t>> png_size(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char h[24] = {};
+  if (!in.read(reinterpret_cast<char*>(h), sizeof h)) return std::nullopt;
+  static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (std::memcmp(h, sig, 8) != 0 || std::memcmp(h + 12, "IHDR", 4) != 0) return std::nullopt;
+  auto be32 = [&](int o) { return std::uint32_t(h[o]) << 24 | std::uint32_t(h[o + 1]) << 16 | std::uint32_t(h[o + 2]) << 8 | h[o + 3]; };
+  return std::make_pair(be32(16), be32(20));
+}
+
 DepthImage read_depth_png(const fs::path& path) {
   if (!fs::exists(path)) throw InvalidInput(fmt::format("{}: frame file does not exist", path.string()));
+  if (const auto size = png_size(path); size && (size->first > 16384 || size->second > 16384))
+    throw InvalidInput(fmt::format("{}: PNG header claims {}x{} pixels (at most 16384x16384)", path.string(),
+                                   size->first, size->second));
   cv::Mat img;
   try {
     img = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
@@ -223,6 +239,10 @@ DepthImage read_depth_png(const fs::path& path) {
 
 DepthImage read_frame(const Stream& s, std::size_t i) {
   const StreamFrame& f = s.frames.at(i);
+  if (const auto size = png_size(s.dir / f.file);
+      size && (size->first != static_cast<std::uint32_t>(s.info.width) || size->second != static_cast<std::uint32_t>(s.info.height)))
+    throw InvalidInput(fmt::format("{}: frame {} is {}x{}, stream.yaml says {}x{}", (s.dir / f.file).string(), i,
+                                   size->first, size->second, s.info.width, s.info.height));
   DepthImage d = read_depth_png(s.dir / f.file);
   if (d.width != s.info.width || d.height != s.info.height)
     throw InvalidInput(fmt::format("{}: frame {} is {}x{}, stream.yaml says {}x{}", (s.dir / f.file).string(), i,

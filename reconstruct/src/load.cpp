@@ -10,6 +10,7 @@
 #include <pcl/point_types.h>
 
 #include "s2c/core/errors.h"
+#include "s2c/core/io.h"
 #include "s2c/core/progress.h"
 #include "s2c/core/stream.h"
 #include "s2c/reconstruct/views.h"
@@ -123,9 +124,16 @@ View view_of_cloud(const fs::path& path, const InputOptions& o) {
   pcl::PCLPointCloud2 blob;
   const std::string ext = path.extension().string();
   int rc = -1;
-  if (ext == ".pcd") rc = pcl::io::loadPCDFile(path.string(), blob);
-  else if (ext == ".ply") rc = pcl::io::loadPLYFile(path.string(), blob);
-  else throw InvalidInput(fmt::format("{}: a cloud must be .ply or .pcd", path.string()));
+  // PCL allocates what a header promises: check it against the file first (exit 2, not an OOM kill).
+  if (ext == ".pcd") {
+    check_pcd_header(path);
+    rc = pcl::io::loadPCDFile(path.string(), blob);
+  } else if (ext == ".ply") {
+    check_mesh_header(path);
+    rc = pcl::io::loadPLYFile(path.string(), blob);
+  } else {
+    throw InvalidInput(fmt::format("{}: a cloud must be .ply or .pcd", path.string()));
+  }
   if (rc < 0) throw InvalidInput(fmt::format("{}: cannot be read as a point cloud", path.string()));
   pcl::PointCloud<pcl::PointXYZ> cloud;
   pcl::fromPCLPointCloud2(blob, cloud);

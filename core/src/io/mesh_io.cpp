@@ -58,6 +58,8 @@ MeshFormat mesh_format(const fs::path& path) {
   throw InvalidInput(fmt::format("{}: unknown mesh extension '{}' (use .ply, .stl, .obj or .off)", path.string(), ext));
 }
 
+void check_mesh_header(const fs::path& path) { io_detail::check_header(path, mesh_format(path)); }
+
 TriangleSoup read_soup(const fs::path& path, bool allow_empty) {
   silence_openmesh();
   const MeshFormat format = mesh_format(path);

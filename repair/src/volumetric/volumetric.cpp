@@ -1,10 +1,13 @@
 #include "s2c/repair/volumetric.h"
 
+#include <unistd.h>
+
 #include <chrono>
 #include <cmath>
 #include <unordered_map>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include "s2c/core/clock.h"
 #include "s2c/core/distance.h"
@@ -26,7 +29,28 @@ std::size_t open_edges(const TriangleSoup& s) {
   return open;
 }
 
+double surface_area(const TriangleSoup& s) {
+  double a = 0;
+  for (const auto& f : s.faces)
+    a += 0.5 * (s.vertices[f[1]] - s.vertices[f[0]]).cross(s.vertices[f[2]] - s.vertices[f[0]]).norm();
+  return a;
+}
+
 }  // namespace
+
+double volumetric_memory_estimate(double area, double h, double band) {
+  // Band vertices ≈ the surface's cells times the band's thickness (2·band voxels); peak memory per
+  // band vertex (closest point, sign, blocks, the extracted mesh) measured 65–84 B (bench/README.md
+  // "Repair", memory rows). 55 B per cell of thickness over-estimates the bracket at 1024³ by 25%
+  // (1.02 GB against 0.81 GB peak RSS): refusing a grid that would have fitted is the safer error.
+  const double surface_cells = area / (h * h);
+  return surface_cells * 2.0 * band * 55.0;
+}
+
+double default_max_memory() {
+  const double pages = static_cast<double>(::sysconf(_SC_PHYS_PAGES)), page = static_cast<double>(::sysconf(_SC_PAGE_SIZE));
+  return pages > 0 && page > 0 ? 0.8 * pages * page : 8e9;
+}
 
 TriangleSoup volumetric_remesh(const TriangleSoup& input, const VolumetricOptions& options, VolumetricStats* stats_out) {
   if (input.faces.empty()) throw InvalidInput("volumetric repair: the mesh has no faces");
@@ -36,6 +60,16 @@ TriangleSoup volumetric_remesh(const TriangleSoup& input, const VolumetricOption
   if (!(longest > 0)) throw InvalidInput("volumetric repair: the mesh has no extent (all vertices coincide)");
   double h = options.voxel;
   if (!(h > 0)) h = longest / (options.resolution > 0 ? options.resolution : 256);
+  const double max_memory = options.max_memory > 0 ? options.max_memory : default_max_memory();
+  const double area = surface_area(input);
+  const double band_first = std::max(options.band, std::sqrt(3.0) + 0.05);
+  if (volumetric_memory_estimate(area, h, band_first) > max_memory) {
+    const double h_min = std::sqrt(area * 2.0 * band_first * 55.0 / max_memory);
+    throw InvalidInput(fmt::format("volumetric repair: a {:.3g} mm voxel on this {:.3g} mm² surface needs about {:.1f} GB, "
+                                   "above the {:.1f} GB allowed (--max-memory); use --voxel {:.3g} or larger",
+                                   h, area, volumetric_memory_estimate(area, h, band_first) / 1e9, max_memory / 1e9,
+                                   h_min * 1.01));
+  }
   const SurfaceQuery query(input);  // one BVH for the field, the sign and the DC normals
   stats.voxel = h;
   // Attempts, until the surface is closed: the band as asked; a wider band that can bridge wider
@@ -50,6 +84,10 @@ TriangleSoup volumetric_remesh(const TriangleSoup& input, const VolumetricOption
   for (const Attempt& attempt : attempts) {
     if (!options.retry && attempt.band != band0) break;
     if (!options.retry && attempt.shell > 0) break;
+    if (attempt.band != band0 && volumetric_memory_estimate(area, h, attempt.band) > max_memory) {
+      spdlog::warn("volumetric repair: a {:.3g}-voxel band would exceed --max-memory; not widened", attempt.band);
+      break;
+    }
     const double radius = attempt.band * h;
     // Edge keys pack 20 bits per axis; beyond that the voxel is far too small for the part anyway.
     const double cells = longest / h + 2 * attempt.band + 4;

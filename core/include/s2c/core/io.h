@@ -22,6 +22,15 @@ MeshFormat mesh_format(const std::filesystem::path& path);
 /// \throw IoError when the file cannot be opened.
 TriangleSoup read_soup(const std::filesystem::path& path, bool allow_empty = false);
 
+/// Checks a mesh or cloud file's header against its size before any reader allocates on its
+/// counts (what read_soup does first; clouds read by other libraries need it too).
+/// \throw InvalidInput naming the file: bad magic, malformed header, counts the file cannot hold.
+void check_mesh_header(const std::filesystem::path& path);
+
+/// Checks a PCD header (fields, sizes, types, counts, width × height = points, data kind) against
+/// the file's size. \throw InvalidInput naming the file and the header line.
+void check_pcd_header(const std::filesystem::path& path);
+
 /// read_soup followed by soup_to_mesh.
 Mesh read_mesh(const std::filesystem::path& path);
 

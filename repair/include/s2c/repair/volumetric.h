@@ -34,7 +34,16 @@ struct VolumetricOptions {
   /// then with a closed shell of 0.6 voxel half-thickness where the band cannot tell inside from
   /// outside. Off: one attempt, whatever it gives.
   bool retry = true;
+  /// Memory the grid may use, bytes; 0 = 80% of this machine's RAM. A grid estimated above it is
+  /// refused before anything is allocated (InvalidInput naming the smallest voxel that fits).
+  double max_memory = 0;
 };
+
+/// What the narrow band and the extracted surface of `area` mm² at voxel `h` and band `band`
+/// voxels need, bytes (calibrated on peak RSS measurements, bench/README.md "Repair").
+double volumetric_memory_estimate(double area, double h, double band);
+/// 80% of the physical memory (the default of --max-memory).
+double default_max_memory();
 
 struct VolumetricStats {
   double voxel = 0;                  ///< mm
