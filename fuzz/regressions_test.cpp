@@ -3,12 +3,18 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <ostream>
 
 #include <gtest/gtest.h>
 
 #include "targets.h"
 
 namespace fs = std::filesystem;
+
+namespace s2c::fuzz {
+// Test names and failure messages show the target's name, not its bytes.
+void PrintTo(const NamedTarget& t, std::ostream* os) { *os << t.name; }
+}  // namespace s2c::fuzz
 
 namespace {
 

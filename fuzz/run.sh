@@ -32,7 +32,7 @@ for t in $targets; do
     -timeout=10 -rss_limit_mb=4096 -detect_leaks=0 -artifact_prefix="$crashes/" -print_final_stats=1 > "$log" 2>&1
   rc=$?
   execs=$(grep -o 'stat::number_of_executed_units: [0-9]*' "$log" | awk '{print $2}')
-  rate=$(grep -o 'stat::average_exec_per_sec: [0-9]*' "$log" | awk '{print $2}')
+  rate=$(grep -o 'stat::average_exec_per_sec: *[0-9]*' "$log" | awk '{print $2}')
   n=$(ls "$corpus" | wc -l)
   found=$(ls "$crashes" 2>/dev/null | wc -l)
   echo "| $t | $seconds | ${execs:-?} | ${rate:-?} | $n | $found |" >> "$results"

@@ -43,10 +43,17 @@ double need_number(const cv::FileStorage& fs, const fs::path& file, const char* 
 
 cv::Mat need_matrix(const cv::FileStorage& fs, const fs::path& file, const char* key, int rows, int cols) {
   cv::FileNode n = need(fs, file, key);
+  // Check the shape before OpenCV reads it: it allocates rows × cols as written, whatever they are.
+  if (!n.isMap() || !n["rows"].isInt() || !n["cols"].isInt() || !n["data"].isSeq())
+    bad(file, fmt::format("key '{}' is not an !!opencv-matrix (rows, cols, dt, data)", key));
+  if (static_cast<int>(n["rows"]) * static_cast<long long>(static_cast<int>(n["cols"])) != rows * cols ||
+      n["data"].size() != static_cast<std::size_t>(rows * cols))
+    bad(file, fmt::format("key '{}' must be a {}x{} matrix (found rows {}, cols {}, {} values)", key, rows, cols,
+                          static_cast<int>(n["rows"]), static_cast<int>(n["cols"]), n["data"].size()));
   cv::Mat m;
   try {
     n >> m;
-  } catch (const cv::Exception&) {
+  } catch (const std::exception&) {
     bad(file, fmt::format("key '{}' is not an !!opencv-matrix", key));
   }
   if (m.empty() || m.rows * m.cols != rows * cols)
@@ -65,7 +72,11 @@ cv::FileStorage open_yaml(const fs::path& file, const char* what) {
     if (!fs.open(file.string(), cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML)) bad(file, "cannot be parsed as YAML");
   } catch (const cv::Exception& e) {
     bad(file, fmt::format("malformed YAML: {}", e.err));
+  } catch (const std::exception& e) {  // OpenCV's parser also lets std::length_error out (found by fuzzing)
+    bad(file, fmt::format("malformed YAML: {}", e.what()));
   }
+  // A document that is a list or a scalar: OpenCV asserts (throws) on the first key lookup.
+  if (!fs.root().isMap()) bad(file, "expected a map of keys (key: value lines)");
   return fs;
 }
 
@@ -92,7 +103,7 @@ int need_size(const cv::FileStorage& fs, const fs::path& file, const char* key) 
   return static_cast<int>(v);
 }
 
-StreamInfo read_info(const fs::path& file) {
+StreamInfo read_info_fields(const fs::path& file) {
   cv::FileStorage fs = open_yaml(file, "a stream directory needs stream.yaml (see docs/formats.md)");
   StreamInfo info;
   const std::string format = (std::string)need(fs, file, "format");
@@ -108,6 +119,20 @@ StreamInfo read_info(const fs::path& file) {
   info.pose_unit_mm = fs["pose_unit_mm"].empty() ? 1.0 : need_number(fs, file, "pose_unit_mm");
   if (info.pose_unit_mm <= 0) bad(file, "pose_unit_mm must be positive");
   return info;
+}
+
+/// OpenCV reports some malformed documents by throwing from a key lookup: still bad input.
+template <class F>
+auto yaml_guard(const fs::path& file, F&& read) -> decltype(read()) {
+  try {
+    return read();
+  } catch (const cv::Exception& e) {
+    bad(file, fmt::format("malformed: {}", e.err));
+  }
+}
+
+StreamInfo read_info(const fs::path& file) {
+  return yaml_guard(file, [&] { return read_info_fields(file); });
 }
 
 std::vector<std::string> split_fields(const std::string& line) {
@@ -145,17 +170,19 @@ void for_each_record(const fs::path& file, F&& f) {
 const char* to_string(Sensor s) { return s == Sensor::depth ? "depth" : "laser"; }
 
 StreamInfo read_calibration(const fs::path& file, Sensor sensor) {
-  cv::FileStorage fs = open_yaml(file, "the calibration file does not exist");
-  StreamInfo info;
-  info.sensor = sensor;
-  read_optics(fs, file, info);
-  if (sensor == Sensor::laser) {
-    info.width = need_size(fs, file, "width");  // the fan's rays: columns of a sweep
-  } else if (!fs["image_width"].empty() || !fs["image_height"].empty()) {
-    info.width = need_size(fs, file, "image_width");
-    info.height = need_size(fs, file, "image_height");
-  }
-  return info;
+  return yaml_guard(file, [&] {
+    cv::FileStorage fs = open_yaml(file, "the calibration file does not exist");
+    StreamInfo info;
+    info.sensor = sensor;
+    read_optics(fs, file, info);
+    if (sensor == Sensor::laser) {
+      info.width = need_size(fs, file, "width");  // the fan's rays: columns of a sweep
+    } else if (!fs["image_width"].empty() || !fs["image_height"].empty()) {
+      info.width = need_size(fs, file, "image_width");
+      info.height = need_size(fs, file, "image_height");
+    }
+    return info;
+  });
 }
 
 Stream read_stream(const fs::path& dir) {
@@ -221,8 +248,8 @@ DepthImage read_depth_png(const fs::path& path) {
   cv::Mat img;
   try {
     img = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception& e) {
-    throw InvalidInput(fmt::format("{}: unreadable frame: {}", path.string(), e.err));
+  } catch (const std::exception& e) {
+    throw InvalidInput(fmt::format("{}: unreadable frame: {}", path.string(), e.what()));
   }
   if (img.empty()) throw InvalidInput(fmt::format("{}: unreadable or truncated image", path.string()));
   if (img.type() != CV_16UC1)

@@ -201,8 +201,9 @@ struct Editor::Impl {
   // small patches (crumbs along a scan's rounded edges) pass the freedom on to their neighbours.
   std::set<int> first_ring(const std::unordered_map<int, Vector3d>& target, const std::map<FeatureRef, Shape>& modified) const {
     std::set<int> free_set;
-    for (const auto& [v, p] : target) {
-      if ((p - pos[v]).norm() <= 0.0) continue;
+    for (const auto& entry : target) {
+      const int v = entry.first;  // a named copy: lambdas may not capture structured bindings before C++20
+      if ((entry.second - pos[v]).norm() <= 0.0) continue;
       vertex_patches.each(v, [&](int q) {
         const FeatureRef r{FeatureRef::Kind::patch, q};
         if (modified.count(r)) return;
@@ -728,12 +729,15 @@ EditReport Editor::Impl::run(const std::vector<std::pair<FeatureRef, ShapeMap>>&
   }
 
   // A locked line keeps its vertices: the edit may not move them, ARAP keeps them fixed.
-  for (const auto& [v, p] : target)
-    if ((p - pos[v]).squaredNorm() > 0.0)
+  // (Named copies, not structured bindings: lambdas may not capture those before C++20.)
+  for (const auto& entry : target) {
+    const int v = entry.first;
+    if ((entry.second - pos[v]).squaredNorm() > 0.0)
       vertex_lines.each(v, [&](int l) {
         if (locks.count({FeatureRef::Kind::line, l}))
           throw ProcessingError(fmt::format("the edit moves vertex {} of {}, which is locked", v, fs.lines[l].id));
       });
+  }
   auto lap = std::chrono::steady_clock::now();
   auto step = [&](double& into) {
     const auto now = std::chrono::steady_clock::now();

@@ -194,6 +194,8 @@ FeatureSet from_json_text(const std::string& text, const std::string& source) {
     doc = json::parse(text);
   } catch (const json::parse_error& e) {
     throw InvalidInput(fmt::format("{}: not valid JSON (byte {}): {}", source, e.byte, e.what()));
+  } catch (const json::exception& e) {  // e.g. a number too large for a double (found by fuzzing)
+    throw InvalidInput(fmt::format("{}: not valid JSON: {}", source, e.what()));
   }
   if (!doc.is_object()) r.fail("document", "expected a JSON object");
   if (r.string(doc, "format", "document") != kFormat)

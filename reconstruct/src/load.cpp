@@ -125,14 +125,13 @@ View view_of_cloud(const fs::path& path, const InputOptions& o) {
   const std::string ext = path.extension().string();
   int rc = -1;
   // PCL allocates what a header promises: check it against the file first (exit 2, not an OOM kill).
-  if (ext == ".pcd") {
-    check_pcd_header(path);
-    rc = pcl::io::loadPCDFile(path.string(), blob);
-  } else if (ext == ".ply") {
-    check_mesh_header(path);
-    rc = pcl::io::loadPLYFile(path.string(), blob);
-  } else {
-    throw InvalidInput(fmt::format("{}: a cloud must be .ply or .pcd", path.string()));
+  if (ext == ".pcd") check_pcd_header(path);
+  else if (ext == ".ply") check_mesh_header(path);
+  else throw InvalidInput(fmt::format("{}: a cloud must be .ply or .pcd", path.string()));
+  try {
+    rc = ext == ".pcd" ? pcl::io::loadPCDFile(path.string(), blob) : pcl::io::loadPLYFile(path.string(), blob);
+  } catch (const std::exception& e) {  // PCL's readers throw on some malformed headers (found by fuzzing)
+    throw InvalidInput(fmt::format("{}: cannot be read as a point cloud: {}", path.string(), e.what()));
   }
   if (rc < 0) throw InvalidInput(fmt::format("{}: cannot be read as a point cloud", path.string()));
   pcl::PointCloud<pcl::PointXYZ> cloud;

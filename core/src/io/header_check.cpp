@@ -1,5 +1,7 @@
 #include "header_check.h"
 
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -62,9 +64,18 @@ std::uint64_t data_lines(const fs::path& p, std::uintmax_t offset) {
 
 DeclaredCounts check_ply(const fs::path& p, std::uintmax_t size) {
   const std::string head = read_prefix(p, 1 << 16);
-  const auto end = head.find("end_header");
   if (head.compare(0, 3, "ply") != 0) fail(p, "not a PLY file (it does not start with 'ply')");
-  if (end == std::string::npos) fail(p, "PLY header has no 'end_header' in its first 64 KiB");
+  // "end_header" must be a line of its own ("vertend_header" is not one: OpenMesh's reader then
+  // loops forever, found by fuzzing).
+  std::size_t end = std::string::npos;
+  for (std::size_t at = head.find("\nend_header"); at != std::string::npos; at = head.find("\nend_header", at + 1)) {
+    const std::size_t after = at + 11;
+    if (after == head.size() || head[after] == '\n' || head[after] == '\r') {
+      end = at + 1;
+      break;
+    }
+  }
+  if (end == std::string::npos) fail(p, "PLY header has no 'end_header' line in its first 64 KiB");
   std::size_t body_start = head.find('\n', end);
   body_start = body_start == std::string::npos ? head.size() : body_start + 1;
 
@@ -107,6 +118,8 @@ DeclaredCounts check_ply(const fs::path& p, std::uintmax_t size) {
         if (e.name == "vertex" && (name == "x" || name == "y" || name == "z")) e.xyz[name[0] - 'x'] = true;
       }
       ++e.props;
+    } else if (kw != "ply" && kw != "comment" && kw != "obj_info" && !kw.empty()) {
+      fail(p, fmt::format("header line {}: unknown PLY header keyword '{}'", line_no, kw.substr(0, 40)));
     }
   }
   if (format.empty()) fail(p, "PLY header has no 'format' line");
@@ -205,6 +218,63 @@ DeclaredCounts check_off(const fs::path& p, std::uintmax_t size) {
 
 }  // namespace
 
+/// OBJ has no header: every line is checked instead. OpenMesh's reader asserts (aborts the
+/// process) on face indices out of range of the normals or texture coordinates read so far and
+/// on mangled face tokens (found by fuzzing), so those are refused here with the line.
+DeclaredCounts check_obj(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  if (!in) throw IoError(fmt::format("{}: cannot open", p.string()));
+  std::string line;
+  std::uint64_t v = 0, vt = 0, vn = 0;
+  int no = 0;
+  auto number = [&](const std::string& t) {
+    char* end = nullptr;
+    const double x = std::strtod(t.c_str(), &end);
+    if (end == t.c_str() || *end || !std::isfinite(x)) fail(p, fmt::format("line {}: '{}' is not a number", no, t.substr(0, 40)));
+  };
+  // One index of a face corner: 1-based, or negative (relative to the end); 0 is never valid.
+  auto index = [&](const std::string& t, std::uint64_t count, const char* what) {
+    char* end = nullptr;
+    const long long i = std::strtoll(t.c_str(), &end, 10);
+    if (t.empty() || *end) fail(p, fmt::format("line {}: face index '{}' is not an integer", no, t.substr(0, 40)));
+    const long long n = static_cast<long long>(count);
+    if (i == 0 || i > n || i < -n)
+      fail(p, fmt::format("line {}: face refers to {} {} but only {} are defined before it", no, what, i, count));
+  };
+  while (std::getline(in, line)) {
+    ++no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    for (unsigned char c : line)
+      if (c < 0x20 && c != '\t') fail(p, fmt::format("line {}: control byte 0x{:02x}: not a text OBJ file", no, c));
+    std::istringstream ls(line);
+    std::string kw, t;
+    ls >> kw;
+    std::vector<std::string> toks;
+    while (ls >> t) toks.push_back(t);
+    if (kw == "v" || kw == "vn" || kw == "vt") {
+      const std::size_t need = kw == "vt" ? 1 : 3;
+      if (toks.size() < need) fail(p, fmt::format("line {}: '{}' needs {} numbers", no, kw, need));
+      for (const auto& x : toks) number(x);
+      (kw == "v" ? v : kw == "vn" ? vn : vt) += 1;
+    } else if (kw == "f") {
+      if (toks.size() < 3) fail(p, fmt::format("line {}: a face needs at least 3 corners", no));
+      for (const auto& corner : toks) {
+        // i, i/t, i//n or i/t/n
+        std::vector<std::string> part;
+        std::size_t at = 0;
+        for (std::size_t slash; (slash = corner.find('/', at)) != std::string::npos; at = slash + 1)
+          part.push_back(corner.substr(at, slash - at));
+        part.push_back(corner.substr(at));
+        if (part.size() > 3) fail(p, fmt::format("line {}: face corner '{}' is malformed", no, corner.substr(0, 40)));
+        index(part[0], v, "vertex");
+        if (part.size() > 1 && !part[1].empty()) index(part[1], vt, "texture coordinate");
+        if (part.size() > 2) index(part[2], vn, "normal");
+      }
+    }
+  }
+  return {};  // counts are not compared: OpenMesh's OBJ reader may skip what it cannot use
+}
+
 DeclaredCounts check_header(const fs::path& path, MeshFormat format) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InvalidInput(fmt::format("{}: no such file", path.string()));
@@ -216,7 +286,7 @@ DeclaredCounts check_header(const fs::path& path, MeshFormat format) {
     case MeshFormat::ply: return check_ply(path, size);
     case MeshFormat::stl: return check_stl(path, size);
     case MeshFormat::off: return check_off(path, size);
-    case MeshFormat::obj:
+    case MeshFormat::obj: return check_obj(path);
     case MeshFormat::vtk: return {};
   }
   return {};

@@ -126,7 +126,10 @@ std::size_t soup_to_mesh(const TriangleSoup& soup, Mesh& mesh) {
     if (mesh.add_face(h[0], h[1], h[2]).is_valid()) continue;
     // A complex edge or a non-manifold vertex: keep the face on its own copies of the
     // vertices so nothing is lost; repair merges them back where it can.
-    for (auto& x : h) x = mesh.add_vertex(mesh.point(x));
+    for (auto& x : h) {
+      const Mesh::Point p = mesh.point(x);  // a copy: add_vertex may reallocate the points it refers to
+      x = mesh.add_vertex(p);
+    }
     mesh.add_face(h[0], h[1], h[2]);
     ++duplicated;
   }

@@ -1,6 +1,8 @@
 // PCD headers (PCL's point cloud format) checked before PCL reads the file: PCL allocates what
 // the header promises, so "POINTS 2000000000" in a 100-byte file would be an out-of-memory kill.
+#include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -53,13 +55,27 @@ void check_pcd_header(const fs::path& p) {
     header_bytes += line.size() + 1;
     if (no > 64 || header_bytes > 65536) bad(p, no, "no DATA line within the first 64 lines: not a PCD header");
     if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty() || line[0] == '#') continue;
+    if (!line.empty() && line[0] == '#') continue;
+    // PCL's header parser crashes on some odd bytes and blank lines (found by fuzzing): a header
+    // is printable ASCII, one entry per line.
+    if (line.empty()) bad(p, no, "blank line in the header");
+    for (unsigned char c : line)
+      if (c < 0x20 || c > 0x7e) bad(p, no, fmt::format("byte 0x{:02x} in the header", c));
     std::istringstream ls(line);
     std::string kw, tok;
     ls >> kw;
     std::vector<std::string> toks;
     while (ls >> tok) toks.push_back(tok);
-    if (kw == "VERSION" || kw == "VIEWPOINT") continue;
+    if (kw == "VERSION") continue;
+    if (kw == "VIEWPOINT") {
+      if (toks.size() != 7) bad(p, no, "VIEWPOINT needs 7 numbers (tx ty tz qw qx qy qz)");
+      for (const auto& t : toks) {
+        char* end = nullptr;
+        const double v = std::strtod(t.c_str(), &end);
+        if (end == t.c_str() || *end || !std::isfinite(v)) bad(p, no, fmt::format("VIEWPOINT value '{}' is not a number", t));
+      }
+      continue;
+    }
     if (kw == "FIELDS") {
       if (toks.empty() || toks.size() > 256) bad(p, no, "FIELDS must list 1 to 256 names");
       fields = toks;
