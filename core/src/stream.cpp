@@ -6,6 +6,7 @@
 #include <cstring>
 #include <fstream>
 #include <optional>
+#include <regex>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -65,8 +66,50 @@ cv::Mat need_matrix(const cv::FileStorage& fs, const fs::path& file, const char*
   return m;
 }
 
+/// OpenCV's YAML parser hangs or throws on some malformed documents (found by fuzzing), so a
+/// stream.yaml or calibration file must first look like what OpenCV writes: a "%YAML:1.0" line,
+/// "---", then `key: value` lines, indented `rows: / cols: / dt: / data:` lines of a matrix and
+/// their continuation lines of numbers. No anchors, tags other than !!opencv-matrix, flow maps,
+/// block scalars or complex keys.
+void check_yaml_shape(const fs::path& file) {
+  std::error_code ec;
+  if (fs::file_size(file, ec) > 65536) bad(file, "larger than 64 KiB: not a stream.yaml / calibration file");
+  std::ifstream in(file, std::ios::binary);
+  std::string line;
+  int no = 0;
+  static const std::regex key_line(R"(^( {0,8})[A-Za-z_][A-Za-z0-9_]*:( .*)?$)");
+  static const std::regex numbers_line(R"(^ +[-+0-9.eE, \[\]]*$)");
+  static const std::regex value(R"(^ *("[^"\\]*"|'[^']*'|!!opencv-matrix|[-+0-9.eE]+|[A-Za-z_][A-Za-z0-9_ .:/-]*|\[[-+0-9.eE, ]*\]?)? *(#.*)?$)");
+  while (std::getline(in, line)) {
+    ++no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    for (unsigned char c : line)
+      if (c < 0x20 || c > 0x7e) bad(file, fmt::format("line {}: byte 0x{:02x} (tabs and control bytes are not YAML here)", no, c));
+    if (no == 1) {
+      if (line != "%YAML:1.0" && line != "%YAML 1.0") bad(file, "line 1: expected %YAML:1.0 (an OpenCV FileStorage YAML file)");
+      continue;
+    }
+    if (no == 2) {
+      if (line != "---") bad(file, "line 2: expected ---");
+      continue;
+    }
+    const auto first = line.find_first_not_of(' ');
+    if (first == std::string::npos || line[first] == '#') continue;
+    std::smatch m;
+    if (std::regex_match(line, m, key_line)) {
+      if (!std::regex_match(m[2].str().empty() ? std::string() : m[2].str().substr(1), value))
+        bad(file, fmt::format("line {}: value '{}' is not a number, a string, a list of numbers or !!opencv-matrix", no,
+                              m[2].str().substr(0, 60)));
+    } else if (!std::regex_match(line, numbers_line)) {
+      bad(file, fmt::format("line {}: expected 'key: value' or a continued list of numbers, found '{}'", no, line.substr(0, 60)));
+    }
+  }
+  if (no < 2) bad(file, "expected %YAML:1.0 and --- (an OpenCV FileStorage YAML file)");
+}
+
 cv::FileStorage open_yaml(const fs::path& file, const char* what) {
   if (!fs::exists(file)) bad(file, fmt::format("missing: {}", what));
+  check_yaml_shape(file);
   cv::FileStorage fs;
   try {
     if (!fs.open(file.string(), cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML)) bad(file, "cannot be parsed as YAML");

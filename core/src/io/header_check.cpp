@@ -90,7 +90,11 @@ DeclaredCounts check_ply(const fs::path& p, std::uintmax_t size) {
     std::string kw;
     ls >> kw;
     if (kw == "format") {
-      ls >> format;
+      std::string version, extra;
+      ls >> format >> version;
+      // OpenMesh's reader loops forever on some malformed format lines (found by fuzzing).
+      if (version != "1.0" || (ls >> extra))
+        fail(p, fmt::format("header line {}: expected 'format ascii|binary_little_endian|binary_big_endian 1.0'", line_no));
       if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
         fail(p, fmt::format("header line {}: unknown PLY format '{}'", line_no, format));
     } else if (kw == "element") {

@@ -1,5 +1,6 @@
 // PCD headers (PCL's point cloud format) checked before PCL reads the file: PCL allocates what
 // the header promises, so "POINTS 2000000000" in a 100-byte file would be an out-of-memory kill.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -117,6 +118,14 @@ void check_pcd_header(const fs::path& p) {
   if (have_points && points != width * height)
     bad(p, no, fmt::format("POINTS {} differs from WIDTH × HEIGHT = {}", points, width * height));
   points = width * height;
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    if (types[i] == 'F' && sizes[i] != 4 && sizes[i] != 8) bad(p, no, fmt::format("field '{}': TYPE F needs SIZE 4 or 8", fields[i]));
+    // scan2cad reads x, y, z as 32-bit floats; PCL copies 4 bytes whatever the field holds.
+    if ((fields[i] == "x" || fields[i] == "y" || fields[i] == "z") && (types[i] != 'F' || sizes[i] != 4 || counts[i] != 1))
+      bad(p, no, fmt::format("field '{}' must be a 32-bit float (TYPE F, SIZE 4, COUNT 1)", fields[i]));
+  }
+  for (const char* axis : {"x", "y", "z"})
+    if (std::find(fields.begin(), fields.end(), axis) == fields.end()) bad(p, no, fmt::format("no field '{}'", axis));
   std::uint64_t point_bytes = 0;
   for (std::size_t i = 0; i < fields.size(); ++i) point_bytes += sizes[i] * counts[i];
   const std::uint64_t body = file_size > header_bytes ? file_size - header_bytes : 0;
