@@ -1,5 +1,6 @@
 #include "header_check.h"
 
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -186,6 +187,42 @@ DeclaredCounts check_stl(const fs::path& p, std::uintmax_t size) {
   return out;
 }
 
+/// The face lines of an ASCII OFF: a corner count of 3..1000, then that many indices below the
+/// vertex count. OpenMesh's reader loops forever on an index too large for its integer parsing
+/// (found by fuzzing), so every face is checked before it reads the file.
+void check_off_faces(const fs::path& p, std::uint64_t header_lines, std::uint64_t vertices, std::uint64_t faces) {
+  std::ifstream in(p, std::ios::binary);
+  std::string line;
+  std::uint64_t data = 0, face = 0;
+  int no = 0;
+  while (face < faces && std::getline(in, line)) {
+    ++no;
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    if (++data <= header_lines + vertices) continue;  // header and vertex lines
+    ++face;
+    std::istringstream ls(line);
+    std::string tok;
+    auto integer = [&](const char* what) {
+      if (!(ls >> tok)) fail(p, fmt::format("line {}: face line ends early", no));
+      char* end = nullptr;
+      errno = 0;
+      const unsigned long long v = std::strtoull(tok.c_str(), &end, 10);
+      if (tok[0] == '-' || end == tok.c_str() || *end || errno == ERANGE)
+        fail(p, fmt::format("line {}: {} '{}' is not a non-negative integer", no, what, tok.substr(0, 40)));
+      return v;
+    };
+    const auto n = integer("corner count");
+    if (n < 3 || n > 1000) fail(p, fmt::format("line {}: a face with {} corners (3 to 1000)", no, n));
+    for (std::uint64_t k = 0; k < n; ++k) {
+      const auto i = integer("vertex index");
+      if (i >= vertices)
+        fail(p, fmt::format("line {}: face refers to vertex {} but there are only {} vertices", no, i, vertices));
+    }
+  }
+}
+
 DeclaredCounts check_off(const fs::path& p, std::uintmax_t size) {
   const std::string head = read_prefix(p, 4096);
   std::istringstream in(head);
@@ -217,6 +254,7 @@ DeclaredCounts check_off(const fs::path& p, std::uintmax_t size) {
   if (lines < *out.vertices + *out.faces)
     fail(p, fmt::format("truncated: the header declares {} vertices and {} faces but only {} data lines follow",
                         *out.vertices, *out.faces, lines));
+  check_off_faces(p, header_lines, *out.vertices, *out.faces);
   return out;
 }
 

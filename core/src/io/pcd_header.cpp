@@ -108,6 +108,20 @@ void check_pcd_header(const fs::path& p) {
     }
   }
   if (data.empty()) bad(p, no, "the header ends without a DATA line");
+  // PCL's header reader does not stop at DATA: it goes on reading lines and takes any that
+  // starts like a header keyword as one (binary data beginning "COLUMNS" redefined the fields
+  // and crashed it; found by fuzzing). The first non-blank line after DATA must not look like one.
+  {
+    std::string next;
+    while (std::getline(in, next) && (next.empty() || next == "\r")) {
+    }
+    static const char* kKeywords[] = {"#", "VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT", "WIDTH",
+                                      "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+    const std::string first = next.substr(0, next.find_first_of(" \t\r"));
+    for (const char* k : kKeywords)
+      if (!first.empty() && first.rfind(k, 0) == 0)
+        bad(p, no + 1, fmt::format("the data after DATA starts with '{}', which PCL would read as a header line", k));
+  }
   if (fields.empty()) bad(p, no, "no FIELDS line");
   if (sizes.size() != fields.size() || types.size() != fields.size())
     bad(p, no, fmt::format("{} FIELDS but {} SIZE and {} TYPE entries", fields.size(), sizes.size(), types.size()));
