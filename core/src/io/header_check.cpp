@@ -6,6 +6,7 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -240,6 +241,10 @@ DeclaredCounts check_off(const fs::path& p, std::uintmax_t size) {
     header_lines += toks.size() > before;
   }
   if (toks.empty() || toks[0].find("OFF") == std::string::npos) fail(p, "not an OFF file (no 'OFF' keyword)");
+  // The keyword exactly as OpenMesh knows it ([ST][C][N][4][n]OFF): with anything else in it
+  // (a control byte, found by fuzzing) its reader never returns.
+  static const std::regex keyword("^(ST)?C?N?4?n?OFF$");
+  if (!std::regex_match(toks[0], keyword)) fail(p, fmt::format("unknown OFF keyword '{}'", toks[0].substr(0, 20)));
   if (toks.size() < 3) fail(p, "OFF header lacks vertex and face counts");
   DeclaredCounts out;
   out.binary = toks.size() > 1 && toks[1] == "BINARY";
