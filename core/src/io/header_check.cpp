@@ -78,6 +78,13 @@ DeclaredCounts check_ply(const fs::path& p, std::uintmax_t size) {
     }
   }
   if (end == std::string::npos) fail(p, "PLY header has no 'end_header' line in its first 64 KiB");
+  // Control bytes in the header (a form feed, found by fuzzing) also send OpenMesh's reader into
+  // an endless loop.
+  for (std::size_t i = 0; i < end; ++i) {
+    const auto c = static_cast<unsigned char>(head[i]);
+    if ((c < 0x20 && c != '\n' && c != '\r' && c != '\t') || c == 0x7f)
+      fail(p, fmt::format("PLY header contains the control byte 0x{:02x}", c));
+  }
   std::size_t body_start = head.find('\n', end);
   body_start = body_start == std::string::npos ? head.size() : body_start + 1;
 
