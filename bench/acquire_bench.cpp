@@ -56,6 +56,18 @@ fs::path make_tum_stream(const fs::path& dir, const fs::path& tum_png, int n) {
   return dir;
 }
 
+/// acquire() into `out` (emptied first), with its CPU time in seconds; a failed capture is an error.
+std::pair<s2c::AcquireResult, double> timed_acquire(s2c::FrameSource& src, const fs::path& out, std::uint64_t frames) {
+  s2c::AcquireOptions ao;
+  ao.frames = frames;
+  fs::remove_all(out);
+  const double cpu0 = cpu_seconds();
+  s2c::AcquireResult res = s2c::acquire(src, out, ao);
+  const double cpu = cpu_seconds() - cpu0;
+  if (res.failure) throw s2c::ProcessingError(*res.failure);
+  return {std::move(res), cpu};
+}
+
 json bench_replay(const fs::path& stream, const fs::path& work) {
   json r;
   {  // decode only: what replay feeds to a consumer
@@ -89,13 +101,7 @@ json bench_live(double fps, int frames, const fs::path& tum_png, const fs::path&
   vo.device = cam.device();
   vo.calibration = tum_calibration();
   auto src = s2c::make_v4l2_source(vo);
-  s2c::AcquireOptions ao;
-  ao.frames = static_cast<std::uint64_t>(frames);
-  fs::remove_all(work / "live");
-  const double cpu0 = cpu_seconds();
-  const auto res = s2c::acquire(*src, work / "live", ao);
-  const double cpu = cpu_seconds() - cpu0;
-  if (res.failure) throw s2c::ProcessingError(*res.failure);
+  const auto [res, cpu] = timed_acquire(*src, work / "live", static_cast<std::uint64_t>(frames));
   const auto& st = res.source;
   return {{"fps_requested", fps},
           {"frames", res.record.kept},
@@ -125,13 +131,7 @@ json bench_usb(double rate_hz, int sweeps, int rows, const fs::path& work) {
   o.calibration.profile_step_mm = 0.1;
   o.profiles_per_sweep = rows;
   auto src = s2c::make_usb_laser_source(o);
-  s2c::AcquireOptions ao;
-  ao.frames = static_cast<std::uint64_t>(sweeps);
-  fs::remove_all(work / "usb");
-  const double cpu0 = cpu_seconds();
-  const auto res = s2c::acquire(*src, work / "usb", ao);
-  const double cpu = cpu_seconds() - cpu0;
-  if (res.failure) throw s2c::ProcessingError(*res.failure);
+  const auto [res, cpu] = timed_acquire(*src, work / "usb", static_cast<std::uint64_t>(sweeps));
   const double profiles = static_cast<double>(sweeps) * rows;
   return {{"rate_requested_hz", rate_hz},
           {"sweeps", res.record.kept},

@@ -307,16 +307,18 @@ DepthImage read_depth_png(const fs::path& path) {
   return d;
 }
 
+/// \throw InvalidInput when frame `i` is not the size stream.yaml gives.
+static void expect_frame_size(const Stream& s, std::size_t i, std::uint64_t w, std::uint64_t h) {
+  if (w != static_cast<std::uint64_t>(s.info.width) || h != static_cast<std::uint64_t>(s.info.height))
+    throw InvalidInput(fmt::format("{}: frame {} is {}x{}, stream.yaml says {}x{}", (s.dir / s.frames[i].file).string(), i,
+                                   w, h, s.info.width, s.info.height));
+}
+
 DepthImage read_frame(const Stream& s, std::size_t i) {
-  const StreamFrame& f = s.frames.at(i);
-  if (const auto size = png_size(s.dir / f.file);
-      size && (size->first != static_cast<std::uint32_t>(s.info.width) || size->second != static_cast<std::uint32_t>(s.info.height)))
-    throw InvalidInput(fmt::format("{}: frame {} is {}x{}, stream.yaml says {}x{}", (s.dir / f.file).string(), i,
-                                   size->first, size->second, s.info.width, s.info.height));
-  DepthImage d = read_depth_png(s.dir / f.file);
-  if (d.width != s.info.width || d.height != s.info.height)
-    throw InvalidInput(fmt::format("{}: frame {} is {}x{}, stream.yaml says {}x{}", (s.dir / f.file).string(), i,
-                                   d.width, d.height, s.info.width, s.info.height));
+  const fs::path path = s.dir / s.frames.at(i).file;
+  if (const auto size = png_size(path)) expect_frame_size(s, i, size->first, size->second);  // before decoding
+  DepthImage d = read_depth_png(path);
+  expect_frame_size(s, i, d.width, d.height);  // formats without a readable header (TIFF)
   return d;
 }
 

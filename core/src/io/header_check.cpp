@@ -270,8 +270,6 @@ DeclaredCounts check_off(const fs::path& p, std::uintmax_t size) {
   return out;
 }
 
-}  // namespace
-
 /// OBJ has no header: every line is checked instead. OpenMesh's reader asserts (aborts the
 /// process) on face indices out of range of the normals or texture coordinates read so far and
 /// on mangled face tokens (found by fuzzing), so those are refused here with the line.
@@ -328,6 +326,8 @@ DeclaredCounts check_obj(const fs::path& p) {
   }
   return {};  // counts are not compared: OpenMesh's OBJ reader may skip what it cannot use
 }
+
+}  // namespace
 
 DeclaredCounts check_header(const fs::path& path, MeshFormat format) {
   std::error_code ec;
