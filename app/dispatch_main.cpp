@@ -29,7 +29,8 @@ const StageInfo kStages[] = {
     {"features", "feature lines, patches, fitted shapes and constraints → features.json"},
     {"edit", "apply an edit script (.s2e) to a mesh and its features"},
     {"check", "is a mesh CAD-ready? one JSON object on stdout"},
-    {"render", "render a mesh to a PNG"},
+    {"render", "a shaded picture of a mesh or cloud (PNG); features or deviation colours"},
+    {"report", "report.html of a run folder: pictures of every stage, tables, deviation map"},
 };
 
 fs::path self_dir() {

@@ -13,12 +13,13 @@ int main(int argc, char** argv) {
   CLI::App app{
       "Run every stage that applies to INPUT and leave the results in DIR:\n"
       "  stream dir or cloud → reconstruct → mesh.ply (+ cloud.ply) → repair → repaired.ply\n"
-      "  → features → features.json → edit (with --edit) → edited.ply; check.json says if it is CAD-ready.\n"
+      "  → features → features.json → edit (with --edit) → edited.ply; check.json says if it is CAD-ready;\n"
+      "  report.html (+ report_files/) shows every stage; with --reference, the deviation from the true part.\n"
       "manifest.json records each stage's command, input/output hashes, timings and status.\n"
       "Re-running skips stages whose inputs and options are unchanged; a failed stage stops the run\n"
       "and keeps earlier outputs. Stages not in this build are reported and skipped.\n"
       "With --from, a recording is made first (the acquire stage) into DIR/stream.\n"
-      "Examples: scan2cad run fixtures/scans/plate --out out\n"
+      "Examples: scan2cad run fixtures/scans/plate --out out --reference fixtures/parts/plate.stl\n"
       "          scan2cad run --from v4l2:/dev/video2 --calibration cam.yaml --frames 300 --out out",
       "scan2cad-run"};
   s2c::CommonOptions common;
@@ -36,7 +37,7 @@ int main(int argc, char** argv) {
       ->needs(from_opt);
   app.add_option("--out", out, "Output directory (created if missing)")->required();
   app.add_option("--edit", edit, "Edit script (.s2e) to apply to the repaired mesh");
-  app.add_option("--reference", reference, "The true part, for a deviation map in the report");
+  app.add_option("--reference", reference, "The true part (same coordinates as the scan), for a deviation map in report.html");
   app.add_flag("--force", o.force, "Run every stage even if up to date");
   s2c::add_common_options(app, common);
   if (int rc = s2c::parse_command_line(app, argc, argv); rc >= 0) return rc;

@@ -15,6 +15,8 @@ pkgs=(
   libusb-1.0-0-dev umockdev libumockdev-dev
   # independent checker used by the tests (CGAL's exact predicates); header-only
   libcgal-dev
+  # the report's browser test: headless Chromium driven through ChromeDriver
+  chromium chromium-driver
 )
 for arg in "$@"; do
   case "$arg" in

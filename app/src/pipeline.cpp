@@ -139,6 +139,16 @@ std::vector<Stage> plan(const RunOptions& o, InputKind kind, fs::path& final_mes
   if (!mesh.empty())
     add({"check", "scan2cad-check", {mesh.string(), "-o", (d / "check.json").string(), "--quiet"}, {mesh},
          {d / "check.json"}, "/dev/null"});
+  // Last: the report reads every earlier output (and the manifest) of the run folder.
+  if (!mesh.empty()) {
+    Stage s{"report", "scan2cad-report", {d.string(), "-o", (d / "report.html").string()}, {mesh},
+            {d / "report.html", d / "report_files"}, {}};
+    if (!o.reference.empty()) {
+      s.args.insert(s.args.end(), {"--reference", o.reference.string()});
+      s.inputs.push_back(o.reference);
+    }
+    add(std::move(s));
+  }
   final_mesh = mesh;
   return stages;
 }
@@ -187,6 +197,8 @@ RunResult run_pipeline(const RunOptions& o) {
   const InputKind kind = o.acquire.from.empty() ? classify_input(o.input) : InputKind::stream;
   if (!o.edit_script.empty() && !fs::exists(o.edit_script))
     throw InvalidInput(fmt::format("{}: edit script not found", o.edit_script.string()));
+  if (!o.reference.empty() && !fs::is_regular_file(o.reference))
+    throw InvalidInput(fmt::format("{}: reference part not found", o.reference.string()));
   if (fs::exists(o.out_dir) && !fs::is_directory(o.out_dir))
     throw InvalidInput(fmt::format("{}: --out exists and is not a directory", o.out_dir.string()));
   fs::create_directories(o.out_dir / "reports");

@@ -11,8 +11,15 @@
 namespace s2c::features {
 namespace {
 
-/// A colour per patch: the hue family says the type, the shade varies with the index so that
-/// neighbouring patches of one type stay distinguishable.
+template <typename T>
+void put(std::string& out, T value) {
+  char bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T));
+  out.append(bytes, sizeof(T));
+}
+
+}  // namespace
+
 std::array<std::uint8_t, 3> patch_colour(ShapeType type, int index) {
   const double shade = 0.55 + 0.45 * ((index * 37) % 11) / 10.0;
   auto c = [&](double r, double g, double b) {
@@ -27,15 +34,6 @@ std::array<std::uint8_t, 3> patch_colour(ShapeType type, int index) {
     default: return c(0.62, 0.62, 0.62);
   }
 }
-
-template <typename T>
-void put(std::string& out, T value) {
-  char bytes[sizeof(T)];
-  std::memcpy(bytes, &value, sizeof(T));
-  out.append(bytes, sizeof(T));
-}
-
-}  // namespace
 
 void write_segments_ply(const Mesh& mesh, const Analysis& analysis, const std::filesystem::path& path) {
   std::string out = fmt::format(

@@ -46,6 +46,28 @@ expect_rc 2 "repair to an unknown format" "$bin/scan2cad" repair "$src/fixtures/
 expect_rc 2 "repair onto its own input" "$bin/scan2cad" repair "$work/bad.off" -o "$work/bad.off"
 expect_rc 2 "repair with --voxel and --resolution" "$bin/scan2cad" repair "$src/fixtures/parts/plate.stl" -o "$work/rep.ply" \
   --voxel 0.5 --resolution 100
+# render and report: bad input exits 2 naming what is wrong, and leaves no picture or page.
+expect_rc 2 "render a bad mesh" "$bin/scan2cad" render "$work/bad.off" -o "$work/bad.png"
+grep -q "bad.off" "$work/stderr" || fail "render's message does not name the file"
+[[ ! -e "$work/bad.png" ]] || fail "render left a picture after bad input"
+expect_rc 2 "render to a non-PNG name" "$bin/scan2cad" render "$src/fixtures/parts/plate.stl" -o "$work/plate.jpg"
+expect_rc 2 "render from an unknown view" "$bin/scan2cad" render "$src/fixtures/parts/plate.stl" -o "$work/p.png" --view sideways
+grep -q "iso" "$work/stderr" || fail "render does not list the views"
+expect_rc 2 "render with a bad size" "$bin/scan2cad" render "$src/fixtures/parts/plate.stl" -o "$work/p.png" --size 10x
+[[ ! -e "$work/p.png" ]] || fail "render left a picture after bad usage"
+expect_rc 0 "render a part" "$bin/scan2cad" render "$src/fixtures/parts/plate.stl" -o "$work/p.png" --size 320x240 --view top
+[[ $(head -c 4 "$work/p.png" | tail -c 3) == PNG ]] || fail "render wrote no PNG"
+expect_rc 2 "report on a folder without a manifest" "$bin/scan2cad" report "$work" -o "$work/r.html"
+grep -q "manifest.json" "$work/stderr" || fail "report does not say what a run folder needs"
+[[ ! -e "$work/r.html" && ! -e "$work/r_files" ]] || fail "report left output after bad input"
+mkdir -p "$work/badrun"; printf '{"stages": [' > "$work/badrun/manifest.json"
+expect_rc 2 "report on a torn manifest" "$bin/scan2cad" report "$work/badrun"
+grep -q "badrun/manifest.json" "$work/stderr" || fail "report does not name the torn manifest"
+[[ -z $(ls -A "$work/badrun" | grep -v manifest.json) ]] || fail "report left files after a torn manifest"
+expect_rc 2 "run with a missing reference" "$bin/scan2cad" run "$src/fixtures/parts/plate.stl" --out "$work/runref" \
+  --reference "$work/nowhere.stl"
+grep -q "nowhere.stl" "$work/stderr" || fail "run does not name the missing reference"
+[[ ! -e "$work/runref" ]] || fail "run made its folder before refusing the reference"
 # acquire: live devices need a calibration; bad sources and corrupt replays exit 2, leave nothing.
 expect_rc 2 "acquire without --calibration" "$bin/scan2cad" acquire --from v4l2:/dev/video0 --out "$work/acq"
 grep -q "calibration" "$work/stderr" || fail "acquire does not ask for --calibration"

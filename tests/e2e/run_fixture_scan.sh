@@ -7,11 +7,12 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 
 # The bundled scan is replayed through the acquire stage (as a live capture would be recorded),
 # then every stage runs on the recording.
-"$bin/scan2cad" run --from "replay:$src/fixtures/scans/plate" --out "$work/out" --quiet || fail "run exited $?"
+ref="$src/fixtures/parts/plate.stl"
+"$bin/scan2cad" run --from "replay:$src/fixtures/scans/plate" --out "$work/out" --reference "$ref" --quiet || fail "run exited $?"
 [[ $(grep -vc '^#' "$work/out/stream/depth.txt") == $(grep -vc '^#' "$src/fixtures/scans/plate/depth.txt") ]] \
   || fail "the recorded stream does not hold every frame of the replay"
-for f in manifest.json cloud.ply mesh.ply repaired.ply features.json segments.ply check.json \
-         reports/acquire.json reports/reconstruct.json reports/repair.json reports/features.json; do
+for f in manifest.json cloud.ply mesh.ply repaired.ply features.json segments.ply check.json report.html \
+         reports/acquire.json reports/reconstruct.json reports/repair.json reports/features.json reports/report.json; do
   [[ -s "$work/out/$f" ]] || fail "missing $f"
 done
 python3 - "$work/out" <<'PY'
@@ -24,6 +25,7 @@ assert st["reconstruct"]["status"] == "ok", st["reconstruct"]
 assert st["repair"]["status"] == "ok", st["repair"]
 assert st["features"]["status"] == "ok", st["features"]
 assert st["check"]["status"] == "ok", st["check"]
+assert st["report"]["status"] == "ok", st["report"]
 for s in m["stages"]:
     if s["status"] == "ok":
         assert s["inputs"] and s["outputs"], s
@@ -49,6 +51,31 @@ assert a["chamfer_mm"] <= 0.03, a["chamfer_mm"]
 assert a["coverage"] >= 0.97, a["coverage"]
 assert a["hausdorff_mm"] <= 1.0, a["hausdorff_mm"]
 PY
+# report.html: a picture per stage (2 views each) and the deviation map against the true part,
+# whose numbers agree with the independent accuracy check above.
+python3 - "$work/out" "$work/accuracy.json" <<'PY'
+import json, os, re, sys
+out = sys.argv[1]
+page = open(os.path.join(out, "report.html"), encoding="utf-8").read()
+images = re.findall(r'<img src="([^"]+)"', page)
+for stem in ["cloud", "mesh", "repaired", "features", "deviation"]:
+    assert any(("/%s_iso.png" % stem) in i for i in images), (stem, images)
+for i in images:
+    data = open(os.path.join(out, i), "rb").read()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 5000, i
+for heading in ["Stages", "Defects found and fixed", "CAD-ready check", "Features", "Deviation from plate.stl"]:
+    assert heading in page, heading
+assert "<svg" in page, "legend and histogram are inline SVG"
+dev = json.load(open(os.path.join(out, "reports", "report.json")))["counts"]["deviation"]
+acc = json.load(open(sys.argv[2]))
+print("report deviation: rms %.4f mm, mean %+.4f mm, max |d| %.3f mm, range ±%g mm (chamfer %.4f)"
+      % (dev["rms_mm"], dev["mean_mm"], dev["max_abs_mm"], dev["range_mm"], acc["chamfer_mm"]))
+assert dev["mean_abs_mm"] <= acc["chamfer_mm"] * 1.5 + 0.005, (dev, acc["chamfer_mm"])
+assert dev["rms_mm"] <= 0.05 and abs(dev["mean_mm"]) <= 0.02, dev
+assert dev["max_abs_mm"] <= acc["hausdorff_mm"] + 0.01, (dev, acc["hausdorff_mm"])
+rep = json.load(open(os.path.join(out, "reports", "report.json")))["counts"]
+assert rep["filled_faces"] > 0, "the trimmed scan mesh has holes: the repair adds surface, shown in orange"
+PY
 # Features of the repaired scan against the plate's ground truth (primitives, lines, constraints).
 "$bin/s2c-bench-features" mesh "$work/out/repaired.ply" "$src/fixtures/parts/plate.truth.json" \
   --features "$work/out/features.json" --json "$work/features_eval.json" > /dev/null || fail "features evaluation"
@@ -65,7 +92,7 @@ assert e["line_f1"] >= 0.9, e
 assert e["constraint_recall"] >= 0.9, e
 PY
 # Re-run: everything up to date.
-"$bin/scan2cad" run --from "replay:$src/fixtures/scans/plate" --out "$work/out" --quiet
+"$bin/scan2cad" run --from "replay:$src/fixtures/scans/plate" --out "$work/out" --reference "$ref" --quiet
 python3 - "$work/out" <<'PY'
 import json, sys, os
 m = json.load(open(os.path.join(sys.argv[1], "manifest.json")))
@@ -74,7 +101,7 @@ assert not ran, f"re-run should skip every stage, ran {ran}"
 PY
 # The edit stage on the repaired scan: the earlier stages are up to date, edit and check run.
 "$bin/scan2cad" run --from "replay:$src/fixtures/scans/plate" --out "$work/out" --edit "$src/fixtures/edits/plate_widen_holes.s2e" \
-  --quiet || fail "run --edit exited $?"
+  --reference "$ref" --quiet || fail "run --edit exited $?"
 for f in edited.ply edited.features.json reports/edit.json; do [[ -s "$work/out/$f" ]] || fail "missing $f"; done
 "$bin/s2c-bench-edit" refit "$work/out/edited.ply" "$work/out/repaired.ply" "$src/fixtures/parts/plate.truth.json" \
   --json "$work/edit_refit.json" || fail "refit of the edited plate"
@@ -86,7 +113,8 @@ st = {s["name"]: s for s in m["stages"]}
 assert st["acquire"]["status"] == "ok", st["acquire"]
 assert st["edit"]["status"] == "ok", st["edit"]
 ran = [s["name"] for s in m["stages"] if s["status"] == "ok" and not s.get("skipped")]
-assert ran == ["edit", "check"], ran
+assert ran == ["edit", "check", "report"], ran
+assert "edited_iso.png" in open(os.path.join(out, "report.html")).read(), "the edited result is pictured"
 c = json.load(open(os.path.join(out, "check.json")))
 assert c["cad_ready"], c["problems"]
 r = json.load(open(sys.argv[2]))

@@ -1,6 +1,8 @@
 #pragma once
 /// \file Feature analysis of a triangle mesh (paper §3, Kim/Choi/Lee 2009): tensor voting per
 /// vertex, feature lines, feature patches with fitted shapes, components and constraints.
+#include <array>
+#include <cstdint>
 #include <filesystem>
 #include <vector>
 
@@ -48,6 +50,11 @@ Analysis analyze(const Mesh& mesh, const FeatureOptions& options, nlohmann::json
 }  // namespace s2c::features
 
 namespace s2c::features {
+
+/// The display colour of patch `index` (0–255 RGB): the hue family says the type (planes blues,
+/// cylinders greens, cones oranges, spheres purples, freeform grey), the shade varies with the
+/// index so that neighbouring patches of one type stay distinguishable.
+std::array<std::uint8_t, 3> patch_colour(ShapeType type, int index);
 
 /// Writes the mesh as binary PLY with a per-face `segment` (patch index) and a colour per patch
 /// (planes in blues, cylinders greens, cones oranges, spheres purples, freeform grey), so the
