@@ -49,10 +49,13 @@ int main(int argc, char** argv) {
 
   int stage_rc = 0;
   const int rc = s2c::run_guarded([&] {
-    o.input = o.acquire.from.empty() ? fs::path(input) : fs::path(out) / "stream";
-    o.out_dir = out;
-    o.edit_script = edit;
-    o.reference = reference;
+    // Absolute paths in the stages' commands: the manifest (and the report, which finds the
+    // run's files through it) then means the same files from any working directory.
+    auto absolute = [](const std::string& p) { return p.empty() ? fs::path() : fs::absolute(p); };
+    o.input = o.acquire.from.empty() ? absolute(input) : absolute(out) / "stream";
+    o.out_dir = absolute(out);
+    o.edit_script = absolute(edit);
+    o.reference = absolute(reference);
     o.quiet = common.quiet;
     std::error_code ec;
     o.bin_dir = fs::read_symlink("/proc/self/exe", ec).parent_path();

@@ -83,9 +83,13 @@ int main(int argc, char** argv) {
     {
       s2c::Report::Step t(report, "prepare");
       if (soup.faces.empty()) {
+        if (!features_path.empty() || !reference.empty() || range > 0)
+          throw s2c::InvalidInput(input + ": a point cloud (no faces): --features, --reference and --range colour meshes");
         r::PointLayer points = r::cloud_layer(soup);
         points.radius = point_radius;
         scene.add(std::move(points));
+      } else if (point_radius > 0) {
+        throw s2c::InvalidInput(input + ": a mesh: --point-radius is for point clouds");
       } else if (!features_path.empty()) {
         r::add_features(scene, soup, s2c::features::read_features(features_path));
       } else if (!reference.empty()) {

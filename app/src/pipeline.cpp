@@ -18,6 +18,7 @@
 #include "s2c/core/clock.h"
 #include "s2c/core/errors.h"
 #include "s2c/core/files.h"
+#include "s2c/core/io.h"
 #include "s2c/core/version.h"
 
 extern char** environ;
@@ -197,8 +198,11 @@ RunResult run_pipeline(const RunOptions& o) {
   const InputKind kind = o.acquire.from.empty() ? classify_input(o.input) : InputKind::stream;
   if (!o.edit_script.empty() && !fs::exists(o.edit_script))
     throw InvalidInput(fmt::format("{}: edit script not found", o.edit_script.string()));
-  if (!o.reference.empty() && !fs::is_regular_file(o.reference))
-    throw InvalidInput(fmt::format("{}: reference part not found", o.reference.string()));
+  if (!o.reference.empty()) {  // refused now rather than after every other stage has run
+    if (!fs::is_regular_file(o.reference)) throw InvalidInput(fmt::format("{}: reference part not found", o.reference.string()));
+    mesh_format(o.reference);
+    check_mesh_header(o.reference);
+  }
   if (fs::exists(o.out_dir) && !fs::is_directory(o.out_dir))
     throw InvalidInput(fmt::format("{}: --out exists and is not a directory", o.out_dir.string()));
   fs::create_directories(o.out_dir / "reports");

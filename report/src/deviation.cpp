@@ -9,6 +9,7 @@
 
 #include "s2c/core/distance.h"
 #include "s2c/core/errors.h"
+#include "soup_util.h"
 
 namespace s2c::report {
 namespace {
@@ -75,21 +76,22 @@ Deviation signed_deviation(const TriangleSoup& measured, const TriangleSoup& ref
   d.distance.assign(n, std::numeric_limits<double>::quiet_NaN());
   d.weight.assign(n, 0.0);
   std::vector<char> used(n, 0);
-  for (const auto& t : measured.faces) {
-    const double area = 0.5 * (measured.vertices[t[1]] - measured.vertices[t[0]])
-                                  .cross(measured.vertices[t[2]] - measured.vertices[t[0]])
-                                  .norm();
-    for (int v : t) {
+  for (std::size_t f = 0; f < measured.faces.size(); ++f) {
+    const double area = face_area(measured, f);
+    for (int v : measured.faces[f]) {
       d.weight[v] += area / 3;
       used[v] = 1;
     }
   }
+  // An inward-oriented reference (some exports are) would flip every sign: "outside" follows
+  // the enclosed volume's sign instead of the file's winding.
+  const double orientation = signed_volume6(reference) < 0 ? -1.0 : 1.0;
   tbb::parallel_for(std::size_t(0), n, [&](std::size_t v) {
     if (!used[v]) return;
     const auto hit = query.closest(measured.vertices[v]);
     if (!hit) return;
     const Eigen::Vector3d offset = measured.vertices[v] - hit->point;
-    const double side = offset.dot(normals.at(reference, hit->face, hit->point));
+    const double side = orientation * offset.dot(normals.at(reference, hit->face, hit->point));
     d.distance[v] = side < 0 ? -hit->distance : hit->distance;
   });
 
@@ -146,8 +148,9 @@ double default_range(const DeviationStats& stats) {
 }
 
 std::vector<double> histogram(const Deviation& d, double range, int bins) {
+  bins = std::clamp(bins, 1, 10000);
   std::vector<double> h(std::size_t(bins) + 2, 0.0);
-  if (!(d.stats.area > 0)) return h;
+  if (!(d.stats.area > 0) || !(std::isfinite(range) && range > 0)) return h;
   for (std::size_t v = 0; v < d.distance.size(); ++v) {
     const double x = d.distance[v];
     if (!std::isfinite(x)) continue;
@@ -157,7 +160,7 @@ std::vector<double> histogram(const Deviation& d, double range, int bins) {
     else if (x > range)
       slot = std::size_t(bins) + 1;
     else
-      slot = 1 + std::size_t(std::min(bins - 1, int((x + range) / (2 * range) * bins)));
+      slot = 1 + std::size_t(std::clamp((x + range) / (2 * range) * bins, 0.0, bins - 1.0));
     h[slot] += d.weight[v] / d.stats.area;
   }
   return h;

@@ -8,6 +8,7 @@
 #include "s2c/core/distance.h"
 #include "s2c/core/errors.h"
 #include "s2c/features/analyze.h"
+#include "soup_util.h"
 
 namespace s2c::report {
 
@@ -20,7 +21,6 @@ PointLayer cloud_layer(const TriangleSoup& cloud, std::size_t max_points) {
     layer.points.push_back(cloud.vertices[i]);
     if (normals) layer.normals.push_back(cloud.normals[i]);
   }
-  if (stride > 1) layer.radius = 0;  // derived from the subsample's own density
   return layer;
 }
 
@@ -38,10 +38,9 @@ ChangedRegions changed_regions(TriangleSoup mesh, const TriangleSoup& base, doub
   r.layer.face_colours.assign(mesh.faces.size(), kMeshGrey);
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
     if (!changed[f]) continue;
-    const auto& t = mesh.faces[f];
     r.layer.face_colours[f] = highlight;
     ++r.faces;
-    r.area += 0.5 * (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]).norm();
+    r.area += face_area(mesh, f);
   }
   r.layer.soup = std::move(mesh);
   return r;

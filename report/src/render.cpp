@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <mutex>
 #include <optional>
 #include <random>
 
@@ -15,6 +14,7 @@
 #include <opencv2/flann.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
 
 #include "s2c/core/errors.h"
 #include "s2c/core/files.h"
@@ -72,10 +72,88 @@ struct Sample {
   Colour colour = Colour::Zero();
   float depth = std::numeric_limits<float>::infinity();  ///< along the camera axis; inf = background
   bool surface = false;  ///< a mesh (outlined), not a point of a cloud
+  bool outline = false;
 };
 
-void embree_error(void*, RTCError code, const char* message) {
-  throw ProcessingError(fmt::format("Embree error {}: {}", int(code), message ? message : ""));
+/// The most samples (pixels × supersampling²) one picture may use: about 20 bytes each.
+constexpr std::size_t kMaxSamples = std::size_t(1) << 25;
+
+/// Embree reports errors through this callback (throwing through Embree is not safe): the first
+/// message is kept and turned into an exception after the call that failed.
+void embree_error(void* user, RTCError code, const char* message) {
+  auto* first = static_cast<std::string*>(user);
+  if (first->empty()) *first = fmt::format("Embree error {}: {}", int(code), message ? message : "");
+}
+
+/// Feature lines, rasterised over the ray-traced depth: drawn where no surface is in front.
+void draw_lines(std::vector<Sample>& samples, int W, int H, const Camera& cam, double diagonal, float half_width,
+                     const std::vector<Polyline>& lines) {
+  const double tolerance = 0.004 * diagonal;
+  const int r = int(std::ceil(half_width));
+  for (const Polyline& line : lines) {
+    const std::size_t n = line.points.size();
+    for (std::size_t i = 0; i + 1 < n + (line.closed ? 1 : 0); ++i) {
+      const Eigen::Vector3d a = cam.project(line.points[i]), b = cam.project(line.points[(i + 1) % n]);
+      if (!(a.z() > 0 && b.z() > 0) || !a.allFinite() || !b.allFinite()) continue;  // behind the camera
+      const double length = (b.head<2>() - a.head<2>()).norm();
+      if (!(length < 4.0 * (W + H))) continue;  // cannot happen for lines on the framed part
+      const int steps = std::max(1, int(std::ceil(length)));
+      for (int k = 0; k <= steps; ++k) {
+        const Eigen::Vector3d p = a + (b - a) * (double(k) / steps);
+        if (!(p.x() > -r - 1 && p.y() > -r - 1 && p.x() < W + r && p.y() < H + r)) continue;
+        const int cx = int(std::lround(p.x())), cy = int(std::lround(p.y()));
+        for (int dy = -r; dy <= r; ++dy)
+          for (int dx = -r; dx <= r; ++dx) {
+            if (dx * dx + dy * dy > half_width * half_width + 0.25f) continue;
+            const int x = cx + dx, y = cy + dy;
+            if (x < 0 || y < 0 || x >= W || y >= H) continue;
+            Sample& t = samples[std::size_t(y) * W + x];
+            if (p.z() <= t.depth + tolerance) t.colour = line.colour;
+          }
+      }
+    }
+  }
+}
+
+/// Outlines: mesh silhouettes (next to background) and depth steps (one part in front of another).
+void mark_outlines(std::vector<Sample>& samples, int W, int H, float step) {
+  tbb::parallel_for(tbb::blocked_range<int>(1, H - 1, 16), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y)
+      for (int x = 1; x < W - 1; ++x) {
+        Sample& here = samples[std::size_t(y) * W + x];
+        if (!std::isfinite(here.depth) || !here.surface) continue;
+        for (const auto& [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+          const float e = samples[std::size_t(y + dy) * W + x + dx].depth;
+          if (!std::isfinite(e) || e - here.depth > step) {
+            here.outline = true;
+            break;
+          }
+        }
+      }
+  });
+}
+
+/// The mean of each ss × ss block (a box filter: what antialiasing by supersampling needs).
+Image downsample(const std::vector<Sample>& samples, int W, int H, int ss) {
+  Image image;
+  image.width = W / ss;
+  image.height = H / ss;
+  image.rgb.resize(std::size_t(image.width) * image.height * 3);
+  const float norm = 1.0f / float(ss * ss);
+  tbb::parallel_for(0, image.height, [&](int y) {
+    for (int x = 0; x < image.width; ++x) {
+      Colour sum = Colour::Zero();
+      for (int j = 0; j < ss; ++j)
+        for (int i = 0; i < ss; ++i) {
+          const Sample& t = samples[std::size_t(y * ss + j) * W + x * ss + i];
+          sum += t.colour * (t.outline ? 0.25f : 1.0f);
+        }
+      for (int k = 0; k < 3; ++k)
+        image.rgb[(std::size_t(y) * image.width + x) * 3 + k] =
+            std::uint8_t(std::lround(std::clamp(sum[k] * norm, 0.0f, 1.0f) * 255));
+    }
+  });
+  return image;
 }
 
 }  // namespace
@@ -129,11 +207,28 @@ struct Scene::Impl {
   RTCScene scene = nullptr;
   std::vector<int> geometry_layer;  // Embree geometry id → index into meshes (≥ 0) or points (-1 - i)
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // subtracted before converting to float
-  std::once_flag built;
+  std::string embree_message;
 
-  ~Impl() {
+  ~Impl() { release(); }
+  void release() {
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
+    scene = nullptr;
+    device = nullptr;
+    geometry_layer.clear();
+  }
+  void check_embree() {
+    if (!embree_message.empty()) throw ProcessingError(embree_message);
+  }
+  template <typename T>
+  T* buffer(RTCGeometry g, RTCBufferType type, RTCFormat format, std::size_t stride, std::size_t count) {
+    void* b = rtcSetNewGeometryBuffer(g, type, 0, format, stride, count);
+    if (!b) {
+      rtcReleaseGeometry(g);
+      check_embree();
+      throw ProcessingError("Embree: out of memory for a geometry buffer");
+    }
+    return static_cast<T*>(b);
   }
 
   Bounds own_bounds() const {
@@ -151,22 +246,32 @@ struct Scene::Impl {
     return b ? *b : Bounds{};
   }
 
+  /// Builds the BVH; on failure everything is released (a later render may try again).
   void build() {
+    try {
+      build_scene();
+    } catch (...) {
+      release();
+      throw;
+    }
+  }
+
+  void build_scene() {
     device = rtcNewDevice("threads=0");
     if (!device) throw ProcessingError("Embree: no device (unsupported CPU?)");
-    rtcSetDeviceErrorFunction(device, embree_error, nullptr);
+    rtcSetDeviceErrorFunction(device, embree_error, &embree_message);
     scene = rtcNewScene(device);
+    check_embree();
     rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
     for (std::size_t i = 0; i < meshes.size(); ++i) {
       const TriangleSoup& s = meshes[i].soup;
       if (s.faces.empty()) continue;
       RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-      auto* v = static_cast<float*>(
-          rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), s.vertices.size()));
+      check_embree();
+      auto* v = buffer<float>(g, RTC_BUFFER_TYPE_VERTEX, RTC_FORMAT_FLOAT3, 3 * sizeof(float), s.vertices.size());
       for (std::size_t k = 0; k < s.vertices.size(); ++k)
         for (int a = 0; a < 3; ++a) v[3 * k + a] = float(s.vertices[k][a] - origin[a]);
-      auto* idx = static_cast<unsigned*>(
-          rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), s.faces.size()));
+      auto* idx = buffer<unsigned>(g, RTC_BUFFER_TYPE_INDEX, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), s.faces.size());
       for (std::size_t k = 0; k < s.faces.size(); ++k)
         for (int a = 0; a < 3; ++a) idx[3 * k + a] = unsigned(s.faces[k][a]);
       attach(g, int(i));
@@ -178,18 +283,17 @@ struct Scene::Impl {
       double radius = p.radius > 0 ? p.radius : 0.9 * point_spacing(p.points);
       if (!(radius > 0)) radius = 1e-3 * std::max(own_bounds().diagonal(), 1.0);
       RTCGeometry g = rtcNewGeometry(device, oriented ? RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT : RTC_GEOMETRY_TYPE_SPHERE_POINT);
-      auto* v = static_cast<float*>(
-          rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), p.points.size()));
+      check_embree();
+      auto* v = buffer<float>(g, RTC_BUFFER_TYPE_VERTEX, RTC_FORMAT_FLOAT4, 4 * sizeof(float), p.points.size());
       for (std::size_t k = 0; k < p.points.size(); ++k) {
         for (int a = 0; a < 3; ++a) v[4 * k + a] = float(p.points[k][a] - origin[a]);
         v[4 * k + 3] = float(radius);
       }
       if (oriented) {
-        auto* n = static_cast<float*>(
-            rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_NORMAL, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), p.points.size()));
+        auto* n = buffer<float>(g, RTC_BUFFER_TYPE_NORMAL, RTC_FORMAT_FLOAT3, 3 * sizeof(float), p.points.size());
         for (std::size_t k = 0; k < p.points.size(); ++k) {
           Eigen::Vector3d d = p.normals[k];
-          if (!(d.norm() > 1e-12)) d = Eigen::Vector3d::UnitZ();
+          if (!std::isfinite(d.squaredNorm()) || !(d.norm() > 1e-12)) d = Eigen::Vector3d::UnitZ();
           d.normalize();
           for (int a = 0; a < 3; ++a) n[3 * k + a] = float(d[a]);
         }
@@ -197,12 +301,14 @@ struct Scene::Impl {
       attach(g, -1 - int(i));
     }
     rtcCommitScene(scene);
+    check_embree();
   }
 
   void attach(RTCGeometry g, int layer) {
     rtcCommitGeometry(g);
     const unsigned id = rtcAttachGeometry(scene, g);
     rtcReleaseGeometry(g);
+    check_embree();
     if (geometry_layer.size() <= id) geometry_layer.resize(id + 1, 0);
     geometry_layer[id] = layer;
   }
@@ -247,9 +353,34 @@ struct Scene::Impl {
 Scene::Scene() : impl_(std::make_unique<Impl>()) {}
 Scene::~Scene() = default;
 
-void Scene::add(MeshLayer mesh) { impl_->meshes.push_back(std::move(mesh)); }
-void Scene::add(PointLayer points) { impl_->points.push_back(std::move(points)); }
-void Scene::add(Polyline line) { impl_->lines.push_back(std::move(line)); }
+namespace {
+void refuse_after_render(const RTCScene scene) {
+  if (scene) throw ProcessingError("Scene::add after the first render: the BVH is built; make a new Scene");
+}
+}  // namespace
+
+void Scene::add(MeshLayer mesh) {
+  refuse_after_render(impl_->scene);
+  const std::size_t nv = mesh.soup.vertices.size(), nf = mesh.soup.faces.size();
+  for (const auto& t : mesh.soup.faces)
+    for (int v : t)
+      if (v < 0 || std::size_t(v) >= nv) throw InvalidInput(fmt::format("render: a face refers to vertex {} of {}", v, nv));
+  if (!mesh.vertex_colours.empty() && mesh.vertex_colours.size() != nv)
+    throw InvalidInput(fmt::format("render: {} vertex colours for {} vertices", mesh.vertex_colours.size(), nv));
+  if (!mesh.face_colours.empty() && mesh.face_colours.size() != nf)
+    throw InvalidInput(fmt::format("render: {} face colours for {} faces", mesh.face_colours.size(), nf));
+  impl_->meshes.push_back(std::move(mesh));
+}
+void Scene::add(PointLayer points) {
+  refuse_after_render(impl_->scene);
+  if (!points.normals.empty() && points.normals.size() != points.points.size())
+    throw InvalidInput(fmt::format("render: {} normals for {} points", points.normals.size(), points.points.size()));
+  impl_->points.push_back(std::move(points));
+}
+void Scene::add(Polyline line) {
+  refuse_after_render(impl_->scene);
+  impl_->lines.push_back(std::move(line));
+}
 void Scene::frame(const Bounds& box) { impl_->framed = box; }
 Bounds Scene::bounds() const { return impl_->own_bounds(); }
 bool Scene::empty() const {
@@ -264,13 +395,21 @@ Image Scene::render(const View& view, const RenderOptions& o) const {
   if (empty()) throw ProcessingError("nothing to render: the scene has no faces and no points");
   if (o.width < 8 || o.height < 8 || o.width > 8192 || o.height > 8192)
     throw InvalidInput(fmt::format("image size {}x{}: each side must be 8..8192 pixels", o.width, o.height));
+  if (!(o.fov_deg >= 1 && o.fov_deg <= 170)) throw InvalidInput(fmt::format("field of view {}°: must be 1..170", o.fov_deg));
+  if (!std::isfinite(view.direction.squaredNorm()) || !(view.direction.norm() > 0))
+    throw InvalidInput("view direction must be a non-zero vector");
+  // Fewer samples per pixel for big pictures, so that memory stays bounded (~20 B per sample).
+  const std::size_t pixels = std::size_t(o.width) * o.height;
+  int ss = std::clamp(o.supersample, 1, 4);
+  while (ss > 1 && pixels * ss * ss > kMaxSamples) --ss;
+  if (pixels > kMaxSamples)
+    throw InvalidInput(fmt::format("image size {}x{}: at most {} pixels", o.width, o.height, kMaxSamples));
   Impl& s = *impl_;
   const Bounds box = s.framed ? *s.framed : s.own_bounds();
-  std::call_once(s.built, [&] {
+  if (!s.scene) {
     s.origin = box.center();
     s.build();
-  });
-  const int ss = std::clamp(o.supersample, 1, 4);
+  }
   const int W = o.width * ss, H = o.height * ss;
   Camera cam = make_camera(view, box, W, H, o.fov_deg);
   std::vector<Sample> samples(std::size_t(W) * H);
@@ -304,79 +443,14 @@ Image Scene::render(const View& view, const RenderOptions& o) const {
         }
       }
   });
-
-  // Feature lines: rasterised over the ray-traced depth, drawn where no surface is in front.
-  const double tolerance = 0.004 * box.diagonal();
-  const float half_width = 0.5f * o.line_width_px * ss;
-  for (const Polyline& line : s.lines) {
-    const std::size_t n = line.points.size();
-    for (std::size_t i = 0; i + 1 < n + (line.closed ? 1 : 0); ++i) {
-      const Eigen::Vector3d a = cam.project(line.points[i]), b = cam.project(line.points[(i + 1) % n]);
-      if (a.z() <= 0 || b.z() <= 0) continue;
-      const int steps = std::max(1, int(std::ceil((b.head<2>() - a.head<2>()).norm())));
-      if (steps > 4 * (W + H)) continue;  // a segment that long is off screen
-      for (int k = 0; k <= steps; ++k) {
-        const Eigen::Vector3d p = a + (b - a) * (double(k) / steps);
-        const int r = int(std::ceil(half_width));
-        for (int dy = -r; dy <= r; ++dy)
-          for (int dx = -r; dx <= r; ++dx) {
-            if (dx * dx + dy * dy > half_width * half_width + 0.25f) continue;
-            const int x = int(std::lround(p.x())) + dx, y = int(std::lround(p.y())) + dy;
-            if (x < 0 || y < 0 || x >= W || y >= H) continue;
-            Sample& t = samples[std::size_t(y) * W + x];
-            if (p.z() <= t.depth + tolerance) t.colour = line.colour;
-          }
-      }
-    }
-  }
-
-  // Outlines: silhouettes (hit next to background) and depth steps (one part in front of another).
-  std::vector<float> darken(samples.size(), 0.0f);
-  if (o.outlines) {
-    const float step = float(0.02 * box.diagonal());
-    tbb::parallel_for(tbb::blocked_range<int>(1, H - 1, 16), [&](const tbb::blocked_range<int>& rows) {
-      for (int y = rows.begin(); y < rows.end(); ++y)
-        for (int x = 1; x < W - 1; ++x) {
-          const Sample& here = samples[std::size_t(y) * W + x];
-          const float d = here.depth;
-          if (!std::isfinite(d) || !here.surface) continue;
-          for (const auto& [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
-            const float e = samples[std::size_t(y + dy) * W + x + dx].depth;
-            if (!std::isfinite(e) || e - d > step) {
-              darken[std::size_t(y) * W + x] = 1.0f;
-              break;
-            }
-          }
-        }
-    });
-  }
-
-  cv::Mat big(H, W, CV_32FC3);
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      const std::size_t i = std::size_t(y) * W + x;
-      Colour c = samples[i].colour * (1.0f - 0.75f * darken[i]);
-      big.at<cv::Vec3f>(y, x) = cv::Vec3f(c.x(), c.y(), c.z());
-    }
-  cv::Mat small;
-  if (ss > 1)
-    cv::resize(big, small, cv::Size(o.width, o.height), 0, 0, cv::INTER_AREA);
-  else
-    small = big;
-  Image image;
-  image.width = o.width;
-  image.height = o.height;
-  image.rgb.resize(std::size_t(o.width) * o.height * 3);
-  for (int y = 0; y < o.height; ++y)
-    for (int x = 0; x < o.width; ++x) {
-      const cv::Vec3f c = small.at<cv::Vec3f>(y, x);
-      for (int k = 0; k < 3; ++k)
-        image.rgb[(std::size_t(y) * o.width + x) * 3 + k] = std::uint8_t(std::lround(std::clamp(c[k], 0.0f, 1.0f) * 255));
-    }
-  return image;
+  draw_lines(samples, W, H, cam, box.diagonal(), 0.5f * o.line_width_px * ss, s.lines);
+  if (o.outlines) mark_outlines(samples, W, H, float(0.02 * box.diagonal()));
+  return downsample(samples, W, H, ss);
 }
 
 void write_png(const Image& image, const std::filesystem::path& path) {
+  if (image.width <= 0 || image.height <= 0 || image.rgb.size() != std::size_t(image.width) * image.height * 3)
+    throw ProcessingError(fmt::format("{}: the image has no pixels or a wrong buffer size", path.string()));
   cv::Mat rgb(image.height, image.width, CV_8UC3, const_cast<std::uint8_t*>(image.rgb.data())), bgr;
   cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
   std::vector<unsigned char> bytes;

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <ctime>
 #include <map>
@@ -19,6 +20,7 @@
 #include "s2c/core/version.h"
 #include "s2c/features/feature_set.h"
 #include "s2c/report/layers.h"
+#include "soup_util.h"
 
 namespace s2c::report {
 namespace fs = std::filesystem;
@@ -50,17 +52,28 @@ std::optional<fs::path> locate(const fs::path& run_dir, const std::string& named
   return std::nullopt;
 }
 
-/// Bounds of every vertex (a cloud has no faces, which core's bounds() goes by).
-Bounds bounds_of_points(const TriangleSoup& cloud) {
-  Bounds b;
-  if (cloud.vertices.empty()) return b;
-  b.min = b.max = cloud.vertices.front();
-  for (const auto& p : cloud.vertices) {
-    b.min = b.min.cwiseMin(p);
-    b.max = b.max.cwiseMax(p);
+/// A path segment as it may stand in a URL (the pictures folder is named after the page).
+std::string url_segment(const std::string& name) {
+  std::string out;
+  for (unsigned char c : name) {
+    if (std::isalnum(c) || c == '.' || c == '_' || c == '-')
+      out += char(c);
+    else
+      out += fmt::format("%{:02X}", c);
   }
-  return b;
+  return out;
 }
+
+/// At most `max` bytes of UTF-8 text, cut at a character boundary, with an ellipsis when cut.
+std::string shorten(const std::string& text, std::size_t max) {
+  if (text.size() <= max) return text;
+  std::size_t n = max;
+  while (n > 0 && (static_cast<unsigned char>(text[n]) & 0xC0) == 0x80) --n;
+  return text.substr(0, n) + "…";
+}
+
+/// A report's pictures folder holds this file: only such a folder is ever replaced.
+constexpr const char* kPicturesMarker = ".scan2cad-report";
 
 json read_json_or_null(const fs::path& path) {
   if (!fs::exists(path)) return nullptr;
@@ -79,7 +92,24 @@ struct Figure {
 
 class Builder {
  public:
-  explicit Builder(const RunReportOptions& o) : o_(o) {}
+  explicit Builder(const RunReportOptions& o)
+      : o_(o),
+        out_dir_(o.output.parent_path().empty() ? fs::path(".") : o.output.parent_path()),
+        pictures_name_(o.output.stem().string() + "_files") {
+    pictures_tmp_ = out_dir_ / fmt::format(".{}.tmp-{}", pictures_name_, ::getpid());
+  }
+  const fs::path& pictures_tmp() const { return pictures_tmp_; }
+  /// The page must be .html and its pictures folder new or a report's own (never someone's folder).
+  void check_output() const {
+    std::string ext = o_.output.extension().string();
+    for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (ext != ".html" && ext != ".htm")
+      throw InvalidInput(fmt::format("{}: the report is HTML: use a .html name", o_.output.string()));
+    const fs::path pictures = out_dir_ / pictures_name_;
+    if (fs::exists(pictures) && !fs::exists(pictures / kPicturesMarker))
+      throw InvalidInput(fmt::format("{} exists and is not the pictures folder of a scan2cad report; choose another -o",
+                                     pictures.string()));
+  }
 
   RunReportResult build(json* counts);
 
@@ -90,6 +120,14 @@ class Builder {
     if (it == stages_.end()) return std::nullopt;
     return it->second;
   }
+  /// reports/NAME.json of a stage that ran successfully (else null: an old report would describe
+  /// another run's outputs).
+  json stage_report(const std::string& name) const {
+    const auto s = stage(name);
+    if (!s || !s->ok()) return nullptr;
+    return read_json_or_null(o_.run_dir / "reports" / (name + ".json"));
+  }
+  void publish(const std::string& page);
   std::optional<fs::path> stage_file(const std::string& name, const std::string& flag) const {
     const auto s = stage(name);
     if (!s || !s->ok()) return std::nullopt;
@@ -107,8 +145,9 @@ class Builder {
   json manifest_;
   std::map<std::string, StageInfo> stages_;
   std::vector<std::string> stage_order_;
-  fs::path pictures_tmp_;
+  fs::path out_dir_, pictures_tmp_;
   std::string pictures_name_;
+  int deviation_figure_ = -1;
   Bounds frame_;
   std::vector<Figure> figures_;
   RunReportResult result_;
@@ -159,6 +198,7 @@ void Builder::picture(Scene& scene, const std::string& stem, const std::string& 
 }
 
 RunReportResult Builder::build(json* counts) {
+  check_output();
   load_manifest();
   for (const auto& v : o_.views) view_named(v);  // bad names fail before any work
 
@@ -180,6 +220,9 @@ RunReportResult Builder::build(json* counts) {
   if (raw_path) raw = read_soup(*raw_path, true);
   if (repaired_path) repaired = read_soup(*repaired_path, true);
   if (final_path) final_mesh = read_soup(*final_path, true);
+  std::optional<TriangleSoup> cloud, features_mesh;
+  if (cloud_path) cloud = read_soup(*cloud_path, true);
+  if (features_mesh_path && (features_path || edited_path)) features_mesh = read_soup(*features_mesh_path);
   std::optional<TriangleSoup> reference;
   if (!o_.reference.empty()) {
     if (!fs::exists(o_.reference)) throw InvalidInput(fmt::format("{}: reference part not found", o_.reference.string()));
@@ -193,20 +236,17 @@ RunReportResult Builder::build(json* counts) {
   else if (raw && !raw->faces.empty())
     frame_ = bounds(*raw);
   else if (cloud_path)
-    frame_ = bounds_of_points(read_soup(*cloud_path, true));
+    frame_ = vertex_bounds(cloud->vertices);
 
-  pictures_name_ = o_.output.stem().string() + "_files";
-  const fs::path out_dir = o_.output.parent_path().empty() ? fs::path(".") : o_.output.parent_path();
-  pictures_tmp_ = out_dir / fmt::format(".{}.tmp-{}", pictures_name_, ::getpid());
   fs::remove_all(pictures_tmp_);
   fs::create_directories(pictures_tmp_);
+  write_file_atomic(pictures_tmp_ / kPicturesMarker, "pictures of " + o_.output.filename().string() + "\n");
 
-  if (cloud_path) {
+  if (cloud && !cloud->vertices.empty()) {
     Scene s;
-    const TriangleSoup cloud = read_soup(*cloud_path, true);
-    s.add(cloud_layer(cloud));
-    picture(s, "cloud", "Scan", fmt::format("The fused scan: {} points{}.", cloud.vertices.size(),
-                                             cloud.normals.empty() ? "" : " with normals"));
+    s.add(cloud_layer(*cloud));
+    picture(s, "cloud", "Scan", fmt::format("The fused scan: {} points{}.", cloud->vertices.size(),
+                                             cloud->normals.empty() ? "" : " with normals"));
   }
   if (raw && !raw->faces.empty()) {
     Scene s;
@@ -227,20 +267,19 @@ RunReportResult Builder::build(json* counts) {
                         "{} faces, {} mm² (faces farther than {} mm from the raw mesh).",
                         result_.filled_faces, html::number(filled_area_), html::number(changed_threshold_)));
   }
-  if (features_path && features_mesh_path) {
+  if (features_path && features_mesh) {
     features_ = features::read_features(*features_path);
     Scene s;
-    add_features(s, read_soup(*features_mesh_path), *features_);
+    add_features(s, *features_mesh, *features_);
     picture(s, "features", "Features",
             fmt::format("Patches by type: planes blue, cylinders green, cones orange, spheres purple, freeform grey. "
                         "Feature lines: straight black, circles and arcs dark red. {} patches, {} lines.",
                         features_->patches.size(), features_->lines.size()));
   }
-  if (edited_path && features_mesh_path) {
-    const TriangleSoup edited = read_soup(*edited_path);
-    const TriangleSoup before = read_soup(*features_mesh_path);
-    const double threshold = std::max(1e-3, 0.5 * median_edge_length(before));
-    ChangedRegions moved = changed_regions(edited, before, threshold, kEditedPurple);
+  if (edited_path && features_mesh) {
+    const TriangleSoup edited = final_path && fs::equivalent(*final_path, *edited_path) ? *final_mesh : read_soup(*edited_path);
+    const double threshold = std::max(1e-3, 0.5 * median_edge_length(*features_mesh));
+    ChangedRegions moved = changed_regions(edited, *features_mesh, threshold, kEditedPurple);
     result_.edited_faces = moved.faces;
     edited_area_ = moved.area;
     Scene s;
@@ -255,6 +294,7 @@ RunReportResult Builder::build(json* counts) {
     result_.deviation_range = o_.range > 0 ? o_.range : default_range(deviation_->stats);
     Scene s;
     s.add(deviation_layer(*final_mesh, *deviation_, result_.deviation_range));
+    deviation_figure_ = int(figures_.size());
     picture(s, "deviation", "Deviation from the reference",
             fmt::format("{} against {}: signed distance, positive = outside the true part.",
                         final_path->filename().string(), reference_name_));
@@ -262,8 +302,8 @@ RunReportResult Builder::build(json* counts) {
 
   // Defects before and after repair: as the repair's report counted them (the same check as
   // `scan2cad check`), or checked here when the repair did not run.
-  check_json_ = read_json_or_null(o_.run_dir / "check.json");
-  repair_report_ = read_json_or_null(o_.run_dir / "reports" / "repair.json");
+  if (const auto check_path = stage_file("check", "-o")) check_json_ = read_json_or_null(*check_path);
+  repair_report_ = stage_report("repair");
   if (repair_report_.is_object() && repair_report_.contains("counts")) {
     raw_defects_ = repair_report_["counts"].value("defects_before", json());
     repaired_defects_ = repair_report_["counts"].value("defects_after", json());
@@ -298,12 +338,12 @@ RunReportResult Builder::build(json* counts) {
   page += "</div>\n";
 
   page += "<section><h2>Pictures</h2><p class=\"muted\">Ray traced on the CPU (Embree); every picture frames the "
-          "final mesh from the same viewpoints.</p>";
+          "same box (the final mesh's) from the same viewpoints.</p>";
   for (const auto& fig : figures_) {
     page += fmt::format("<h3>{}</h3><div class=\"pictures\">", html::escape(fig.title));
     for (const auto& [file, view] : fig.images)
       page += fmt::format("<figure><img src=\"{}/{}\" width=\"{}\" height=\"{}\" alt=\"{} ({} view)\"><figcaption>{} view</figcaption></figure>",
-                          html::escape(pictures_name_), html::escape(file), o_.render.width, o_.render.height,
+                          html::escape(url_segment(pictures_name_)), html::escape(url_segment(file)), o_.render.width, o_.render.height,
                           html::escape(fig.title), html::escape(view), html::escape(view));
     page += fmt::format("</div><p class=\"muted\">{}</p>\n", html::escape(fig.caption));
   }
@@ -316,12 +356,7 @@ RunReportResult Builder::build(json* counts) {
   page += stage_details_section();
   page += "</main></body></html>\n";
 
-  // Publish: pictures first, then the page that refers to them.
-  const fs::path pictures_dir = out_dir / pictures_name_;
-  fs::remove_all(pictures_dir);
-  fs::rename(pictures_tmp_, pictures_dir);
-  write_file_atomic(o_.output, page);
-  result_.pictures_dir = pictures_dir;
+  publish(page);
 
   if (counts) {
     (*counts)["pictures"] = result_.pictures;
@@ -338,6 +373,29 @@ RunReportResult Builder::build(json* counts) {
   return result_;
 }
 
+/// Pictures first, then the page that refers to them. The old pictures folder is kept aside
+/// until the new page is written, and put back if that fails.
+void Builder::publish(const std::string& page) {
+  const fs::path pictures_dir = out_dir_ / pictures_name_;
+  const fs::path aside = out_dir_ / fmt::format(".{}.old-{}", pictures_name_, ::getpid());
+  const bool had_old = fs::exists(pictures_dir);
+  if (had_old) fs::rename(pictures_dir, aside);
+  try {
+    fs::rename(pictures_tmp_, pictures_dir);
+    write_file_atomic(o_.output, page);
+  } catch (...) {
+    std::error_code ec;
+    if (had_old) {
+      fs::remove_all(pictures_dir, ec);
+      fs::rename(aside, pictures_dir, ec);
+    }
+    throw;
+  }
+  std::error_code ec;
+  if (had_old) fs::remove_all(aside, ec);
+  result_.pictures_dir = pictures_dir;
+}
+
 std::string Builder::deviation_section() const {
   const auto& s = deviation_->stats;
   const double range = result_.deviation_range;
@@ -345,11 +403,11 @@ std::string Builder::deviation_section() const {
   out += "<p class=\"muted\">Signed distance of every vertex of the final mesh to the true part (positive = "
          "material outside the part, negative = inside), area-weighted. The reference is used in the scan's "
          "coordinates (no best-fit alignment).</p><div class=\"deviation\">";
-  for (const auto& fig : figures_)
-    if (fig.title.rfind("Deviation", 0) == 0 && !fig.images.empty())
-      out += fmt::format("<figure><img src=\"{}/{}\" width=\"{}\" height=\"{}\" alt=\"deviation map\"></figure>",
-                         html::escape(pictures_name_), html::escape(fig.images.front().first), o_.render.width,
-                         o_.render.height);
+  if (deviation_figure_ >= 0 && !figures_[deviation_figure_].images.empty())
+    out += fmt::format("<figure><img src=\"{}/{}\" width=\"{}\" height=\"{}\" alt=\"deviation map\"></figure>",
+                       html::escape(url_segment(pictures_name_)),
+                       html::escape(url_segment(figures_[deviation_figure_].images.front().first)), o_.render.width,
+                       o_.render.height);
   out += html::legend_svg(range);
   out += "<div>" + html::histogram_svg(histogram(*deviation_, range, 40), range);
   auto mm = [](double v) { return html::number(v) + " mm"; };
@@ -374,7 +432,7 @@ std::string Builder::stages_section() const {
                         : status == "failed" ? html::badge(false, "", "failed")
                                              : html::escape(status + (e.contains("reason") ? " (" + e.value("reason", "") + ")" : ""));
     std::string steps;
-    const json rep = read_json_or_null(o_.run_dir / "reports" / (name + ".json"));
+    const json rep = stage_report(name);
     if (rep.is_object() && rep.contains("timings_s") && rep["timings_s"].is_object())
       for (const auto& [k, v] : rep["timings_s"].items())
         if (v.is_number()) steps += fmt::format("{}{} {} s", steps.empty() ? "" : ", ", html::escape(k), html::number(v.get<double>()));
@@ -503,14 +561,13 @@ std::string Builder::stage_details_section() const {
   std::string out = "<section><h2>Parameters and counts per stage</h2><p class=\"muted\">From each stage's --report "
                     "(reports/STAGE.json in the run folder).</p>";
   for (const auto& name : stage_order_) {
-    const json rep = read_json_or_null(o_.run_dir / "reports" / (name + ".json"));
+    const json rep = stage_report(name);
     if (!rep.is_object()) continue;
     std::vector<std::vector<std::string>> rows;
     for (const char* part : {"parameters", "counts"})
       if (rep.contains(part) && rep[part].is_object())
         for (const auto& [k, v] : rep[part].items()) {
-          std::string text = v.dump();
-          if (text.size() > 160) text = text.substr(0, 157) + "…";
+          const std::string text = shorten(v.dump(), 157);
           rows.push_back({part, html::escape(k), html::escape(text)});
         }
     if (!rows.empty())
@@ -523,13 +580,21 @@ std::string Builder::stage_details_section() const {
 
 RunReportResult write_run_report(const RunReportOptions& options, json* counts) {
   Builder builder(options);
+  // No partial output: the pictures' temporary folder goes with any failure.
+  auto discard = [&] {
+    std::error_code ec;
+    fs::remove_all(builder.pictures_tmp(), ec);
+  };
   try {
     return builder.build(counts);
+  } catch (const json::exception& e) {
+    discard();
+    throw InvalidInput(fmt::format("{}: a JSON file of the run has unexpected content ({})", options.run_dir.string(), e.what()));
+  } catch (const fs::filesystem_error& e) {
+    discard();
+    throw IoError(e.what());
   } catch (...) {
-    // No partial output: the pictures' temporary folder goes with the failure.
-    const fs::path dir = options.output.parent_path().empty() ? fs::path(".") : options.output.parent_path();
-    std::error_code ec;
-    fs::remove_all(dir / fmt::format(".{}_files.tmp-{}", options.output.stem().string(), ::getpid()), ec);
+    discard();
     throw;
   }
 }

@@ -6,7 +6,7 @@ image must have decoded, and a screenshot of the page must not be blank.
 usage: report_browser.py REPORT.html SCREENSHOT.png
 exit 77 (skipped) when chromium or chromedriver is not installed (scripts/install-deps.sh installs them).
 """
-import base64, json, os, re, shutil, socket, subprocess, sys, time, urllib.request, zlib
+import base64, html, json, os, re, shutil, socket, subprocess, sys, time, urllib.parse, urllib.request, zlib
 
 
 def fail(msg):
@@ -75,8 +75,9 @@ def main():
     page = open(report, encoding="utf-8").read()
     refs = re.findall(r'(?:src|href)="([^"]+)"', page)
     for ref in refs:
-        if re.match(r"^[a-z]+:", ref):
+        if re.match(r"^([A-Za-z][A-Za-z0-9+.-]*:|//)", ref):
             fail("report refers to %s: it must open offline" % ref)
+        ref = urllib.parse.unquote(html.unescape(ref))
         if not os.path.isfile(os.path.join(os.path.dirname(report), ref)):
             fail("report refers to %s, which is not there" % ref)
 
@@ -90,6 +91,8 @@ def main():
                 break
             except Exception:
                 time.sleep(0.1)
+        else:
+            fail("chromedriver did not answer on port %d within 10 s" % port)
         caps = {"capabilities": {"alwaysMatch": {"browserName": "chrome", "goog:chromeOptions": {
             "binary": chromium,
             "args": ["--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
@@ -103,6 +106,8 @@ def main():
                 if state == "complete":
                     break
                 time.sleep(0.1)
+            else:
+                fail("the page did not finish loading within 10 s")
             images = call(base, "POST", "/session/%s/execute/sync" % sid, {"script": """
                 return Array.from(document.images).map(i => ({src: i.getAttribute('src'), complete: i.complete,
                                                               w: i.naturalWidth, h: i.naturalHeight}));""", "args": []})

@@ -90,3 +90,25 @@ TEST(ChangedRegions, FindsTheSurfaceThatIsNew) {
 
 }  // namespace
 }  // namespace s2c::report
+
+namespace s2c::report {
+namespace {
+
+TEST(Deviation, InwardWoundReferenceGivesTheSameSigns) {
+  TriangleSoup inward;
+  test::add_cube(inward, Eigen::Vector3d::Zero(), 10, /*inward=*/true);
+  TriangleSoup grown = test::cube(10);
+  for (auto& p : grown.vertices) p = Eigen::Vector3d::Constant(5) + (p - Eigen::Vector3d::Constant(5)) * 1.02;
+  for (double d : signed_deviation(grown, inward).distance) EXPECT_GT(d, 0.0);
+}
+
+TEST(Deviation, HistogramOfABadRangeIsEmptyNotACrash) {
+  const Deviation d = signed_deviation(test::cube(10), test::cube(10));
+  for (double range : {0.0, -1.0, std::nan(""), HUGE_VAL}) {
+    const auto h = histogram(d, range, 10);
+    EXPECT_EQ(h.size(), 12u);
+  }
+}
+
+}  // namespace
+}  // namespace s2c::report

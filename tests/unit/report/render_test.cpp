@@ -114,6 +114,36 @@ TEST(Render, RejectsBadViewsSizesAndEmptyScenes) {
   EXPECT_THROW(scene.render(view_named("iso"), o), InvalidInput);
 }
 
+TEST(Render, RefusesLayersThatDoNotMatchTheirMesh) {
+  Scene scene;
+  TriangleSoup bad = test::cube();
+  bad.faces.push_back({0, 1, 99});
+  EXPECT_THROW(scene.add(MeshLayer{bad, {}, {}, kMeshGrey}), InvalidInput);
+  EXPECT_THROW(scene.add(MeshLayer{test::cube(), {Colour::Zero()}, {}, kMeshGrey}), InvalidInput);
+  EXPECT_THROW(scene.add(MeshLayer{test::cube(), {}, {Colour::Zero()}, kMeshGrey}), InvalidInput);
+  PointLayer points;
+  points.points = {{0, 0, 0}, {1, 0, 0}};
+  points.normals = {{0, 0, 1}};
+  EXPECT_THROW(scene.add(points), InvalidInput);
+  // After the first render the BVH is built: adding is refused rather than silently not drawn.
+  scene.add(MeshLayer{test::cube(), {}, {}, kMeshGrey});
+  RenderOptions o;
+  o.width = o.height = 16;
+  scene.render(view_named("iso"), o);
+  EXPECT_THROW(scene.add(Polyline{}), ProcessingError);
+}
+
+TEST(Render, HugePicturesAreRefusedBeforeAllocating) {
+  Scene scene;
+  scene.add(MeshLayer{test::cube(), {}, {}, kMeshGrey});
+  RenderOptions o;
+  o.width = o.height = 8192;  // 2^26 pixels: beyond the 2^25 budget even at one ray per pixel
+  EXPECT_THROW(scene.render(view_named("iso"), o), InvalidInput);
+  o.fov_deg = 0;
+  o.width = o.height = 16;
+  EXPECT_THROW(scene.render(view_named("iso"), o), InvalidInput);
+}
+
 TEST(Render, WritesAPng) {
   Scene scene;
   scene.add(MeshLayer{test::cube(), {}, {}, kMeshGrey});

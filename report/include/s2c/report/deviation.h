@@ -28,7 +28,8 @@ struct Deviation {
 
 /// Signed distances from the measured vertices to the reference surface. The sign comes from
 /// the angle-weighted pseudo-normal at the closest point (Bærentzen & Aanæs), which is right at
-/// edges and corners too, where a face normal would give speckles of the wrong sign.
+/// edges and corners too, where a face normal would give speckles of the wrong sign. "Outside"
+/// is taken from the reference's enclosed volume, so an inward-wound reference gives the same signs.
 /// \throw InvalidInput when the reference has no faces.
 Deviation signed_deviation(const TriangleSoup& measured, const TriangleSoup& reference);
 

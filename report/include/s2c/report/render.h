@@ -13,7 +13,7 @@
 
 namespace s2c::report {
 
-using Colour = Eigen::Vector3f;  ///< linear RGB in [0, 1]
+using Colour = Eigen::Vector3f;  ///< RGB in [0, 1], written to the PNG as is (×255, no gamma curve)
 
 /// The grey of a plain mesh, the orange of filled holes, the purple of edited regions.
 inline const Colour kMeshGrey{0.74f, 0.76f, 0.79f};
@@ -46,7 +46,7 @@ struct Polyline {
 /// Where the camera looks from: a direction from the centre of the framed box to the eye.
 struct View {
   std::string name;             ///< "iso", "back", "top", … (file names, captions)
-  Eigen::Vector3d direction;    ///< unit, from the target towards the eye
+  Eigen::Vector3d direction = Eigen::Vector3d(1, -1.2, 0.9).normalized();  ///< from the target towards the eye
   Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
 };
 
@@ -58,7 +58,8 @@ std::string view_names();
 
 struct RenderOptions {
   int width = 640, height = 480;
-  int supersample = 2;    ///< rays per pixel per axis (antialiasing)
+  int supersample = 2;    ///< rays per pixel per axis (antialiasing); lowered for huge pictures
+                          ///< so that a picture takes at most ~2^25 samples (~700 MB)
   double fov_deg = 30;    ///< vertical field of view
   bool outlines = true;   ///< dark silhouettes and depth steps, as CAD viewers draw them
   float line_width_px = 2.0f;
@@ -70,8 +71,8 @@ struct Image {
   std::vector<std::uint8_t> rgb;
 };
 
-/// The things to draw. Build once, render from several views: the BVH is built on the first
-/// render and reused.
+/// The things to draw. Add everything, then render from several views: the BVH is built on the
+/// first render and reused (adding after that throws ProcessingError).
 class Scene {
  public:
   Scene();
@@ -79,6 +80,7 @@ class Scene {
   Scene(const Scene&) = delete;
   Scene& operator=(const Scene&) = delete;
 
+  /// \throw InvalidInput for face indices out of range or colour / normal counts that do not match.
   void add(MeshLayer mesh);
   void add(PointLayer points);
   void add(Polyline line);
@@ -89,7 +91,8 @@ class Scene {
   Bounds bounds() const;
   bool empty() const;
 
-  /// \throw ProcessingError when the scene is empty or Embree fails.
+  /// \throw ProcessingError when the scene is empty or Embree fails; InvalidInput for a size
+  ///        beyond 8192 per side or 2^25 pixels, a field of view outside 1..170°.
   Image render(const View& view, const RenderOptions& options = {}) const;
 
  private:

@@ -31,9 +31,11 @@ struct RunReportResult {
   std::filesystem::path pictures_dir;
 };
 
-/// Builds the report. Missing stages (not run, failed) are said so on the page, not an error.
-/// \throw InvalidInput when run_dir has no readable manifest.json or the reference is unreadable,
-///        IoError when the output cannot be written. Nothing is left behind on failure.
+/// Builds the report. Stages that did not run or failed are absent from the page (their old
+/// files and reports are not used). \throw InvalidInput when run_dir has no readable manifest.json,
+/// a run file has unexpected content, the reference is unreadable, the output is not .html or its
+/// pictures folder exists and is not a report's; IoError when the output cannot be written.
+/// A failure leaves the previous report (if any) and no temporary files.
 RunReportResult write_run_report(const RunReportOptions& options, nlohmann::json* counts = nullptr);
 
 }  // namespace s2c::report
