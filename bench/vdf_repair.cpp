@@ -21,12 +21,12 @@
 
 #include "common/sampling.h"
 #include "s2c/core/check.h"
+#include "s2c/core/clock.h"
 #include "s2c/core/io.h"
 #include "s2c/repair/defects.h"
 #include "s2c/repair/volumetric.h"
 #ifdef S2C_HAVE_OPENVDB
 #include "peers/openvdb_remesh.h"
-#include "s2c/core/clock.h"
 #endif
 
 namespace {

@@ -134,6 +134,9 @@ View view_of_cloud(const fs::path& path, const InputOptions& o) {
     throw InvalidInput(fmt::format("{}: cannot be read as a point cloud: {}", path.string(), e.what()));
   }
   if (rc < 0) throw InvalidInput(fmt::format("{}: cannot be read as a point cloud", path.string()));
+  // fromPCLPointCloud2 takes &cloud[0] of an empty cloud (UBSan: a null reference): refuse first.
+  if (std::size_t(blob.width) * blob.height == 0 || blob.data.empty())
+    throw InvalidInput(fmt::format("{}: only 0 finite points (the cloud is empty)", path.string()));
   pcl::PointCloud<pcl::PointXYZ> cloud;
   pcl::fromPCLPointCloud2(blob, cloud);
   View v;

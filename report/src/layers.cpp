@@ -1,10 +1,13 @@
 #include "s2c/report/layers.h"
 
 #include <algorithm>
+#include <limits>
+#include <unordered_map>
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
+#include "s2c/core/disjoint_sets.h"
 #include "s2c/core/distance.h"
 #include "s2c/core/errors.h"
 #include "s2c/features/analyze.h"
@@ -36,11 +39,56 @@ ChangedRegions changed_regions(TriangleSoup mesh, const TriangleSoup& base, doub
     });
   }
   r.layer.face_colours.assign(mesh.faces.size(), kMeshGrey);
+  DisjointSets sets(mesh.vertices.size());  // regions: changed faces that share a vertex
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
     if (!changed[f]) continue;
+    const auto& t = mesh.faces[f];
     r.layer.face_colours[f] = highlight;
     ++r.faces;
     r.area += face_area(mesh, f);
+    sets.unite(t[0], t[1]);
+    sets.unite(t[0], t[2]);
+  }
+  std::unordered_map<int, double> region_area;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f)
+    if (changed[f]) region_area[sets.find(mesh.faces[f][0])] += face_area(mesh, f);
+  r.regions = region_area.size();
+  if (!region_area.empty()) {
+    const int biggest = std::max_element(region_area.begin(), region_area.end(),
+                                         [](const auto& a, const auto& b) { return a.second < b.second; })->first;
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero(), centroid = Eigen::Vector3d::Zero();
+    std::vector<std::size_t> members;
+    for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+      const auto& t = mesh.faces[f];
+      if (!changed[f] || sets.find(t[0]) != biggest) continue;
+      members.push_back(f);
+      const Eigen::Vector3d n2 = (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
+      normal += n2;
+      centroid += n2.norm() * (mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]) / 3;
+      for (int v : t) {
+        if (!r.largest) r.largest = Bounds{mesh.vertices[v], mesh.vertices[v]};
+        r.largest->min = r.largest->min.cwiseMin(mesh.vertices[v]);
+        r.largest->max = r.largest->max.cwiseMax(mesh.vertices[v]);
+      }
+    }
+    // A band around a bore has normals that cancel: look instead along the normal of the face
+    // nearest the region's centre (from the axis side, at the far half of the band).
+    const double area2 = 2 * region_area[biggest];
+    if (normal.norm() >= 0.3 * area2 && normal.norm() > 0) {
+      r.largest_normal = normal.normalized();
+    } else if (area2 > 0) {
+      centroid /= area2;
+      double best = std::numeric_limits<double>::infinity();
+      for (std::size_t f : members) {
+        const auto& t = mesh.faces[f];
+        const Eigen::Vector3d c = (mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]) / 3;
+        const Eigen::Vector3d n2 = (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
+        if ((c - centroid).squaredNorm() < best && n2.norm() > 0) {
+          best = (c - centroid).squaredNorm();
+          r.largest_normal = n2.normalized();
+        }
+      }
+    }
   }
   r.layer.soup = std::move(mesh);
   return r;

@@ -27,6 +27,7 @@ constexpr unsigned kNoHit = RTC_INVALID_GEOMETRY_ID;
 struct Camera {
   Eigen::Vector3d eye, forward, right, up;
   double tan_half_fov = 0, aspect = 1;
+  double distance = 0, radius = 0;  // eye to the framed box's centre; the box's bounding sphere
   int width = 0, height = 0;
 
   /// The (unit) ray direction through pixel (x, y) of a width × height raster.
@@ -60,6 +61,8 @@ Camera make_camera(const View& view, const Bounds& box, int width, int height, d
   c.right = c.forward.cross(up).normalized();
   c.up = c.right.cross(c.forward);
   c.eye = box.center() - distance * c.forward;
+  c.distance = distance;
+  c.radius = radius;
   return c;
 }
 
@@ -414,6 +417,8 @@ Image Scene::render(const View& view, const RenderOptions& o) const {
   Camera cam = make_camera(view, box, W, H, o.fov_deg);
   std::vector<Sample> samples(std::size_t(W) * H);
   const Eigen::Vector3d eye = cam.eye - s.origin;
+  // Cutaway: rays start just before the plane through the framed box's centre (facing the camera).
+  const float tnear = o.cutaway ? float(std::max(0.0, cam.distance - 0.1 * cam.radius)) : 0.0f;
   tbb::parallel_for(tbb::blocked_range<int>(0, H, 8), [&](const tbb::blocked_range<int>& rows) {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
@@ -427,7 +432,7 @@ Image Scene::render(const View& view, const RenderOptions& o) const {
         rh.ray.dir_x = float(dir.x());
         rh.ray.dir_y = float(dir.y());
         rh.ray.dir_z = float(dir.z());
-        rh.ray.tnear = 0;
+        rh.ray.tnear = tnear;
         rh.ray.tfar = std::numeric_limits<float>::infinity();
         rh.ray.mask = ~0u;
         rh.hit.geomID = kNoHit;

@@ -134,6 +134,9 @@ class Builder {
     return locate(o_.run_dir, s->arg(flag));
   }
   void picture(Scene& scene, const std::string& stem, const std::string& title, const std::string& caption);
+  /// One picture from `view` with its own framing and options (a close-up).
+  void picture(Scene& scene, const std::string& stem, const std::string& title, const std::string& caption,
+               const View& view, const Bounds& box, const RenderOptions& options);
   std::string stages_section() const;
   std::string defects_section() const;
   std::string features_section() const;
@@ -195,6 +198,15 @@ void Builder::picture(Scene& scene, const std::string& stem, const std::string& 
     ++result_.pictures;
   }
   figures_.push_back(std::move(fig));
+}
+
+void Builder::picture(Scene& scene, const std::string& stem, const std::string& title, const std::string& caption,
+                      const View& view, const Bounds& box, const RenderOptions& options) {
+  scene.frame(box);
+  const std::string file = stem + ".png";
+  write_png(scene.render(view, options), pictures_tmp_ / file);
+  figures_.push_back(Figure{title, caption, {{file, view.name}}});
+  ++result_.pictures;
 }
 
 RunReportResult Builder::build(json* counts) {
@@ -261,11 +273,29 @@ RunReportResult Builder::build(json* counts) {
     ChangedRegions filled = changed_regions(*repaired, raw ? *raw : TriangleSoup{}, changed_threshold_, kFilledOrange);
     result_.filled_faces = filled.faces;
     filled_area_ = filled.area;
+    std::optional<Scene> closeup;
+    if (filled.largest) {
+      closeup.emplace();
+      closeup->add(filled.layer);
+    }
     s.add(std::move(filled.layer));
     picture(s, "repaired", "Repaired mesh",
             fmt::format("Orange: surface the repair added where the raw mesh had none (holes filled, gaps closed): "
-                        "{} faces, {} mm² (faces farther than {} mm from the raw mesh).",
-                        result_.filled_faces, html::number(filled_area_), html::number(changed_threshold_)));
+                        "{} faces, {} mm² in {} regions (faces farther than {} mm from the raw mesh).",
+                        result_.filled_faces, html::number(filled_area_), filled.regions, html::number(changed_threshold_)));
+    if (closeup) {
+      // The largest added region seen along its normal, whatever is in front of it cut away.
+      const double half = std::max(0.5 * filled.largest->diagonal(), 0.03 * frame_.diagonal()) * 1.8;
+      const Eigen::Vector3d c = filled.largest->center();
+      const Bounds box{c - Eigen::Vector3d::Constant(half), c + Eigen::Vector3d::Constant(half)};
+      RenderOptions options = o_.render;
+      options.cutaway = true;
+      picture(*closeup, "repaired_closeup", "Largest added region (close-up)",
+              fmt::format("The largest region the repair added, {} mm across, seen along its normal; surfaces in "
+                          "front of it are cut away.",
+                          html::number(filled.largest->diagonal())),
+              View{"close-up", filled.largest_normal}, box, options);
+    }
   }
   if (features_path && features_mesh) {
     features_ = features::read_features(*features_path);

@@ -60,6 +60,7 @@ page = open(os.path.join(out, "report.html"), encoding="utf-8").read()
 images = re.findall(r'<img src="([^"]+)"', page)
 for stem in ["cloud", "mesh", "repaired", "features", "deviation"]:
     assert any(("/%s_iso.png" % stem) in i for i in images), (stem, images)
+assert any("/repaired_closeup.png" in i for i in images), "the holes the repair filled get a close-up"
 for i in images:
     data = open(os.path.join(out, i), "rb").read()
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 5000, i

@@ -3,6 +3,7 @@
 /// grey, the regions of a mesh that are new compared with another (filled holes, edits),
 /// feature patches coloured by type with their feature lines, and a deviation map.
 #include <cstddef>
+#include <optional>
 
 #include "s2c/core/mesh.h"
 #include "s2c/features/feature_set.h"
@@ -19,6 +20,10 @@ struct ChangedRegions {
   MeshLayer layer;
   std::size_t faces = 0;  ///< faces farther than the threshold from the base surface
   double area = 0;        ///< their area, mm²
+  std::size_t regions = 0;  ///< connected regions of such faces
+  /// The largest region (by area): its bounds and area-weighted normal, for a close-up.
+  std::optional<Bounds> largest;
+  Eigen::Vector3d largest_normal = Eigen::Vector3d::UnitZ();
 };
 /// `mesh` in grey with the faces whose centre is farther than `threshold` mm from `base` in
 /// `highlight`: what a repair added (filled holes, closed gaps) or what an edit moved.

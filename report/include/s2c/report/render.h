@@ -62,6 +62,9 @@ struct RenderOptions {
                           ///< so that a picture takes at most ~2^25 samples (~700 MB)
   double fov_deg = 30;    ///< vertical field of view
   bool outlines = true;   ///< dark silhouettes and depth steps, as CAD viewers draw them
+  bool cutaway = false;   ///< rays start just before the plane through the framed box's centre:
+                          ///< what lies in front of it is cut away (a close-up of the far side of a
+                          ///< bore's wall through the near side and the part around it)
   float line_width_px = 2.0f;
 };
 
