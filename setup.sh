@@ -22,7 +22,8 @@ if [[ "$mode" == demo ]]; then
   echo
   echo "Done. Results in out/: cloud.ply, mesh.ply, repaired.ply (CAD-ready mesh), features.json and segments.ply (features),"
   echo "edited.ply and edited.features.json (corner holes widened to 7 mm by fixtures/edits/plate_widen_holes.s2e),"
-  echo "check.json (is the final mesh CAD-ready?), manifest.json, reports/ (per-stage reports)"
+  echo "check.json (is the final mesh CAD-ready?), manifest.json, reports/ (per-stage reports),"
+  echo "report.html + report_files/ (pictures of every stage and the tables: open it in a browser)"
 else
   ctest --test-dir "$build" --output-on-failure -j 2 --timeout 900
 fi

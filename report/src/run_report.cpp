@@ -128,6 +128,16 @@ class Builder {
     return read_json_or_null(o_.run_dir / "reports" / (name + ".json"));
   }
   void publish(const std::string& page);
+  /// A mesh or cloud of the run, each file read once (repaired.ply is usually the features' mesh
+  /// and the final mesh too); nullptr without a path. allow_empty as read_soup's.
+  const TriangleSoup* soup(const std::optional<fs::path>& path, bool allow_empty) {
+    if (!path) return nullptr;
+    const fs::path key = fs::weakly_canonical(*path);
+    auto it = soups_.find(key);
+    if (it == soups_.end()) it = soups_.emplace(key, read_soup(*path, allow_empty)).first;
+    if (!allow_empty && it->second.faces.empty()) read_soup(*path, false);  // throws its "no faces" error
+    return &it->second;
+  }
   std::optional<fs::path> stage_file(const std::string& name, const std::string& flag) const {
     const auto s = stage(name);
     if (!s || !s->ok()) return std::nullopt;
@@ -156,6 +166,7 @@ class Builder {
   RunReportResult result_;
   json raw_defects_, repaired_defects_;  // CheckResult as JSON (scan2cad check's keys)
   json check_json_, repair_report_;
+  std::map<fs::path, TriangleSoup> soups_;
   std::optional<features::FeatureSet> features_;
   std::optional<Deviation> deviation_;
   double filled_area_ = 0, edited_area_ = 0, changed_threshold_ = 0;
@@ -228,17 +239,15 @@ RunReportResult Builder::build(json* counts) {
     throw InvalidInput(fmt::format("{}: the run has no mesh or cloud yet (did its first stage fail? see manifest.json)",
                                    o_.run_dir.string()));
 
-  std::optional<TriangleSoup> raw, repaired, final_mesh;
-  if (raw_path) raw = read_soup(*raw_path, true);
-  if (repaired_path) repaired = read_soup(*repaired_path, true);
-  if (final_path) final_mesh = read_soup(*final_path, true);
-  std::optional<TriangleSoup> cloud, features_mesh;
-  if (cloud_path) cloud = read_soup(*cloud_path, true);
-  if (features_mesh_path && (features_path || edited_path)) features_mesh = read_soup(*features_mesh_path);
-  std::optional<TriangleSoup> reference;
+  const TriangleSoup* raw = soup(raw_path, true);
+  const TriangleSoup* repaired = soup(repaired_path, true);
+  const TriangleSoup* final_mesh = soup(final_path, true);
+  const TriangleSoup* cloud = soup(cloud_path, true);
+  const TriangleSoup* features_mesh = features_path || edited_path ? soup(features_mesh_path, false) : nullptr;
+  const TriangleSoup* reference = nullptr;
   if (!o_.reference.empty()) {
     if (!fs::exists(o_.reference)) throw InvalidInput(fmt::format("{}: reference part not found", o_.reference.string()));
-    reference = read_soup(o_.reference);
+    reference = soup(o_.reference, false);
     reference_name_ = o_.reference.filename().string();
   }
 
@@ -307,9 +316,8 @@ RunReportResult Builder::build(json* counts) {
                         features_->patches.size(), features_->lines.size()));
   }
   if (edited_path && features_mesh) {
-    const TriangleSoup edited = final_path && fs::equivalent(*final_path, *edited_path) ? *final_mesh : read_soup(*edited_path);
     const double threshold = std::max(1e-3, 0.5 * median_edge_length(*features_mesh));
-    ChangedRegions moved = changed_regions(edited, *features_mesh, threshold, kEditedPurple);
+    ChangedRegions moved = changed_regions(*soup(edited_path, false), *features_mesh, threshold, kEditedPurple);
     result_.edited_faces = moved.faces;
     edited_area_ = moved.area;
     Scene s;
