@@ -4,12 +4,16 @@
 #include <limits>
 #include <vector>
 
+#include "fit_models.h"
 #include "fit_util.h"
 
 namespace s2c::features {
 namespace {
 
 using fit::Normalized;
+using fit::CylinderModel;
+using fit::ConeModel;
+using fit::SphereModel;
 using Eigen::Vector3d;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 /// Candidate initial estimates are refined on at most this many samples; the best one then on all
@@ -34,76 +38,6 @@ Normalized thin(const Normalized& s, int max) {
   return out;
 }
 
-/// Unit axis tilted from `a` by (d0, d1) in its perpendicular frame `uv`.
-Vector3d tilt(const Vector3d& a, const Eigen::Matrix<double, 3, 2>& uv, double d0, double d1) {
-  return (a + d0 * uv.col(0) + d1 * uv.col(1)).normalized();
-}
-
-// ---- models for fit::levenberg_marquardt ----
-
-struct SphereModel {
-  static constexpr int kParams = 4;
-  using Vec = Eigen::Matrix<double, kParams, 1>;
-  const Normalized* s;
-  Vector3d c;
-  double r;
-
-  int residual_count() const { return s->size(); }
-  void residuals(const Vec& d, Eigen::VectorXd& out) const {
-    const Vector3d c2 = c + d.head<3>();
-    const double r2 = r + d[3];
-    for (int i = 0; i < s->size(); ++i) out[i] = s->sw[i] * ((s->p[i] - c2).norm() - r2);
-  }
-  void update(const Vec& d) {
-    c += d.head<3>();
-    r += d[3];
-  }
-};
-
-/// Cylinder (theta fixed at 0) or cone around the axis through p along a: in the half plane of a
-/// sample, (h, rho) = (along the axis from p, away from it), the surface is the line through
-/// (0, r) at angle theta from the axis; the residual is the signed distance to that line. Unlike
-/// an apex parameterisation this stays regular as the cone tends to a cylinder. Parameters: axis
-/// tilt (2), shift of p perpendicular to the axis (2; a shift along the axis changes nothing), r,
-/// and for a cone theta.
-template <int K>
-struct AxisModel {
-  static constexpr int kParams = K;
-  using Vec = Eigen::Matrix<double, K, 1>;
-  const Normalized* s;
-  Vector3d a, p;
-  double r, theta;
-  Eigen::Matrix<double, 3, 2> uv;
-
-  AxisModel(const Normalized& samples, const Vector3d& axis, const Vector3d& point, double radius, double angle)
-      : s(&samples), a(axis.normalized()), p(point), r(radius), theta(angle), uv(fit::perpendicular_frame(a)) {}
-
-  void moved(const Vec& d, Vector3d& a2, Vector3d& p2, double& r2, double& t2) const {
-    a2 = tilt(a, uv, d[0], d[1]);
-    p2 = p + uv * d.template segment<2>(2);
-    r2 = r + d[4];
-    t2 = K > 5 ? theta + d[K - 1] : theta;
-  }
-  int residual_count() const { return s->size(); }
-  void residuals(const Vec& d, Eigen::VectorXd& out) const {
-    Vector3d a2, p2;
-    double r2, t2;
-    moved(d, a2, p2, r2, t2);
-    const double ct = std::cos(t2), st = std::sin(t2);
-    for (int i = 0; i < s->size(); ++i) {
-      const Vector3d v = s->p[i] - p2;
-      const double h = a2.dot(v);
-      const double rho = (v - h * a2).norm();
-      out[i] = s->sw[i] * ((rho - r2) * ct - h * st);
-    }
-  }
-  void update(const Vec& d) {
-    moved(d, a, p, r, theta);
-    uv = fit::perpendicular_frame(a);
-  }
-};
-using CylinderModel = AxisModel<5>;
-using ConeModel = AxisModel<6>;
 
 /// An axis-model start: axis, point on it, radius there, half angle (0 for a cylinder).
 struct AxisStart {

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -75,7 +77,17 @@ void finish(Fit& f, const Samples& s);
 /// True when every number of the shape is finite.
 bool finite(const Shape& s);
 
-/// Minimises Σ r_i² with Levenberg–Marquardt (forward-difference Jacobian). The model holds its
+/// True when Model has `void jacobian(Eigen::Matrix<double, Dynamic, kParams>& J) const`: the
+/// analytic Jacobian of its residuals at delta = 0.
+template <class Model, class = void>
+struct has_jacobian : std::false_type {};
+template <class Model>
+struct has_jacobian<Model, std::void_t<decltype(std::declval<const Model&>().jacobian(
+                               std::declval<Eigen::Matrix<double, Eigen::Dynamic, Model::kParams>&>()))>>
+    : std::true_type {};
+
+/// Minimises Σ r_i² with Levenberg–Marquardt (the model's analytic Jacobian when it has one, a
+/// forward-difference Jacobian otherwise: k more residual passes per iteration). The model holds its
 /// current parameters and is re-based after each accepted step, so a parameterisation local to
 /// the current estimate (axis tilts in its perpendicular frame) stays non-degenerate. Model:
 ///   static constexpr int kParams;
@@ -95,17 +107,28 @@ double levenberg_marquardt(Model& model, int max_iterations = kMaxIterations) {
   double cost = r.squaredNorm();
   if (!std::isfinite(cost)) return cost;
   // Parameters are O(1) in normalised coordinates: an absolute step suits all of them.
-  constexpr double h = 1e-7;
+  [[maybe_unused]] constexpr double h = 1e-7;
   double lambda = 1e-3;
   for (int it = 0; it < max_iterations && cost > 1e-28; ++it) {
-    for (int j = 0; j < k; ++j) {
-      Vec d = Vec::Zero();
-      d[j] = h;
-      model.residuals(d, r_try);
-      J.col(j) = (r_try - r) / h;
+    if constexpr (has_jacobian<Model>::value) {
+      model.jacobian(J);
+    } else {
+      for (int j = 0; j < k; ++j) {
+        Vec d = Vec::Zero();
+        d[j] = h;
+        model.residuals(d, r_try);
+        J.col(j) = (r_try - r) / h;
+      }
     }
-    const Mat A = J.transpose() * J;
-    const Vec g = J.transpose() * r;
+    // Normal equations row by row: with k ≤ 6 columns this beats a general matrix product, whose
+    // packing dominates for such thin matrices.
+    Mat A = Mat::Zero();
+    Vec g = Vec::Zero();
+    for (int i = 0; i < m; ++i) {
+      const Vec row = J.row(i).transpose();
+      A.noalias() += row * row.transpose();
+      g += row * r[i];
+    }
     const double floor = 1e-12 * std::max(A.trace() / k, 1e-300);
     bool accepted = false, converged = false;
     while (lambda < 1e12) {

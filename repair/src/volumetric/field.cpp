@@ -251,17 +251,32 @@ void classify_by_winding(const TriangleSoup& soup, const SurfaceQuery& query, do
   auto set_inside = [&](int v, bool inside) {
     if (inside) grid.block(static_cast<std::size_t>(v) / N).flags[v % N] |= kInside;
   };
-  std::size_t evaluations = 0, mixed = 0;
-  for (const auto& [root, members] : regions) {
-    constexpr std::size_t kSamples = 33;
-    const std::size_t step = std::max<std::size_t>(1, members.size() / kSamples);
+  // Sample every region first, regions in parallel: a leaky band falls into many small regions.
+  struct Votes {
     int in = 0, out = 0, unsure = 0;
-    for (std::size_t k = 0; k < members.size(); k += step) {
-      const double w = winding(position(members[k]));
-      ++evaluations;
-      if (std::abs(w - 0.5) < 0.25) ++unsure;
-      (w >= 0.5 ? in : out)++;
+  };
+  std::vector<const std::vector<int>*> region_list;
+  region_list.reserve(regions.size());
+  for (const auto& entry : regions) region_list.push_back(&entry.second);
+  std::vector<Votes> votes(region_list.size());
+  constexpr std::size_t kSamples = 33;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, region_list.size(), 16), [&](const auto& r) {
+    for (std::size_t ri = r.begin(); ri != r.end(); ++ri) {
+      const std::vector<int>& members = *region_list[ri];
+      const std::size_t step = std::max<std::size_t>(1, members.size() / kSamples);
+      Votes& v = votes[ri];
+      for (std::size_t k = 0; k < members.size(); k += step) {
+        const double w = winding(position(members[k]));
+        if (std::abs(w - 0.5) < 0.25) ++v.unsure;
+        (w >= 0.5 ? v.in : v.out)++;
+      }
     }
+  });
+  std::size_t evaluations = 0, mixed = 0;
+  for (std::size_t ri = 0; ri < region_list.size(); ++ri) {
+    const std::vector<int>& members = *region_list[ri];
+    const auto [in, out, unsure] = votes[ri];
+    evaluations += static_cast<std::size_t>(in + out);
     const bool decisive = unsure == 0 && (in == 0 || out == 0);
     if (shell > 0) {
       // The shell fallback extracts one consistent field everywhere: the signed distance minus
