@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <queue>
 #include <set>
 #include <unordered_map>
@@ -492,28 +491,13 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
   }
 
   // Merge neighbours that are one primitive (a plane cut by a spurious crease, a cylinder split
-  // in two): same type, and the union still fits within tolerance. Pairs are taken greedily in
-  // index order, a region merging at most once per round.
-  // A pair's union fit depends only on its two regions, so it is kept (the key: first face and
-  // size of each; merging changes both) and never recomputed while both are unchanged. Within a
-  // round the regions of every pair still to be tried are as they were when the round began, so
-  // all of the round's fits are computed first, in parallel, then applied in the serial order.
-  using Key = std::array<std::size_t, 4>;
-  std::map<Key, Fit> union_fit;
+  // in two): same type, and the union still fits within tolerance.
+  // A pair that failed to merge is not tried again while both regions are unchanged (the key:
+  // first face and size of each; merging changes both).
+  std::set<std::array<std::size_t, 4>> refused;
   auto key_of = [](const Region& A, const Region& B) {
-    return Key{static_cast<std::size_t>(A.faces.front()), A.faces.size(), static_cast<std::size_t>(B.faces.front()),
-               B.faces.size()};
-  };
-  auto candidates = [&](const Region& A, const Region& B) {
-    if (A.fit.shape.type != B.fit.shape.type || A.fit.shape.type == ShapeType::freeform) return false;
-    // Across a real crease two planes never fit one plane; this guards near-tangent cases.
-    return !(A.fit.shape.type == ShapeType::plane &&
-             std::abs(A.fit.shape.dir.dot(B.fit.shape.dir)) < std::cos(2.0 * M_PI / 180));
-  };
-  auto union_faces = [](const Region& A, const Region& B) {
-    std::vector<int> faces = A.faces;
-    faces.insert(faces.end(), B.faces.begin(), B.faces.end());
-    return faces;
+    return std::array<std::size_t, 4>{static_cast<std::size_t>(A.faces.front()), A.faces.size(),
+                                      static_cast<std::size_t>(B.faces.front()), B.faces.size()};
   };
   bool merged = true;
   while (merged) {
@@ -528,27 +512,26 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
     }
     std::sort(pairs.begin(), pairs.end());
     pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-    std::vector<std::pair<int, int>> todo;
-    for (auto [a, b] : pairs)
-      if (candidates(seg.regions[a], seg.regions[b]) && !union_fit.count(key_of(seg.regions[a], seg.regions[b])))
-        todo.emplace_back(a, b);
-    std::vector<Fit> fits(todo.size());
-    tbb::parallel_for(0, static_cast<int>(todo.size()), [&](int i) {
-      const Region& A = seg.regions[todo[i].first];
-      const Region& B = seg.regions[todo[i].second];
-      fits[i] = choose_shape(region_samples(m, normals, union_faces(A, B)), p);
-    });
-    for (std::size_t i = 0; i < todo.size(); ++i)
-      union_fit.emplace(key_of(seg.regions[todo[i].first], seg.regions[todo[i].second]), std::move(fits[i]));
     std::vector<char> touched(seg.regions.size(), 0);
     for (auto [a, b] : pairs) {
       if (touched[a] || touched[b]) continue;
       Region& A = seg.regions[a];
       Region& B = seg.regions[b];
-      if (!candidates(A, B)) continue;
-      const Fit& f = union_fit.at(key_of(A, B));
-      if (f.shape.type != A.fit.shape.type) continue;
-      A.faces = union_faces(A, B);
+      if (A.fit.shape.type != B.fit.shape.type || A.fit.shape.type == ShapeType::freeform) continue;
+      // Across a real crease two planes never fit one plane; this guards near-tangent cases.
+      if (A.fit.shape.type == ShapeType::plane &&
+          std::abs(A.fit.shape.dir.dot(B.fit.shape.dir)) < std::cos(2.0 * M_PI / 180))
+        continue;
+      const auto key = key_of(A, B);
+      if (refused.count(key)) continue;
+      std::vector<int> faces = A.faces;
+      faces.insert(faces.end(), B.faces.begin(), B.faces.end());
+      const Fit f = choose_shape(region_samples(m, normals, faces), p);
+      if (f.shape.type != A.fit.shape.type) {
+        refused.insert(key);
+        continue;
+      }
+      A.faces = std::move(faces);
       A.fit = f;
       A.area += B.area;
       for (int g : B.faces) seg.face_region[g] = a;
