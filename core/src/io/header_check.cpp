@@ -239,6 +239,7 @@ DeclaredCounts check_off(const fs::path& p, std::uintmax_t size) {
   std::string line;
   // Header keyword, then the first non-comment numbers: nv nf ne.
   std::uint64_t header_lines = 0;
+  std::size_t keyword_line_tokens = 0;
   while (toks.size() < 4 && std::getline(in, line)) {
     const auto hash = line.find('#');
     if (hash != std::string::npos) line.resize(hash);
@@ -246,6 +247,7 @@ DeclaredCounts check_off(const fs::path& p, std::uintmax_t size) {
     const std::size_t before = toks.size();
     while (toks.size() < 4 && ls >> tok) toks.push_back(tok);
     header_lines += toks.size() > before;
+    if (before == 0) keyword_line_tokens = toks.size();
   }
   if (toks.empty() || toks[0].find("OFF") == std::string::npos) fail(p, "not an OFF file (no 'OFF' keyword)");
   // The keyword exactly as OpenMesh knows it ([ST][C][N][4][n]OFF): with anything else in it
@@ -256,6 +258,11 @@ DeclaredCounts check_off(const fs::path& p, std::uintmax_t size) {
   DeclaredCounts out;
   out.binary = toks.size() > 1 && toks[1] == "BINARY";
   if (out.binary) return out;  // binary OFF: counts are checked after reading
+  // OpenMesh takes the whole first line as the keyword and reads the counts from the next one:
+  // counts on the keyword line would be read from the vertex data (a negative "face count" made
+  // its reader loop for billions of faces; found by fuzzing).
+  if (keyword_line_tokens > 1)
+    fail(p, "the vertex and face counts must be on the line after 'OFF', not on the same line");
   out.vertices = parse_count(p, toks[1], "vertex");
   out.faces = parse_count(p, toks[2], "face");
   const long double need = 6.0L * *out.vertices + 8.0L * *out.faces;

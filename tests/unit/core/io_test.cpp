@@ -163,6 +163,10 @@ TEST(MeshIo, AbsurdHeaderCountsAreRejectedBeforeAllocating) {
   expect_invalid(dir / "huge.off", "more than");
   write_text(dir / "neg.off", "OFF\n-3 1 0\n0 0 0\n");
   expect_invalid(dir / "neg.off", "not a non-negative integer");
+  // OpenMesh reads counts from the line after the keyword: here it would take "3" vertices and
+  // "-70" faces and loop for 2^32 faces (fuzzing found it); refused up front instead.
+  write_text(dir / "sameline.off", "OFF 0 0 39\n3\n-70 )\n");
+  expect_invalid(dir / "sameline.off", "on the line after 'OFF'");
   write_text(dir / "huge.vtk", "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 99999999999 float\n");
   expect_invalid(dir / "huge.vtk", "cannot fit");
 }
