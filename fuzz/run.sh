@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets with clang + ASan + UBSan (in build-fuzz/) and runs each for
-# SECONDS (default 60), one per core at a time, starting from its seed corpus. A crash, sanitizer report, leak or hang
-# (> 10 s per input) is saved to fuzz/crashes/TARGET/ and makes the script fail; turn it into a
-# regression by fixing the bug and moving the file to fuzz/regressions/TARGET/.
+# SECONDS (default 60), one per core at a time, starting from its seed corpus. A crash, sanitizer
+# report, leak or hang (> 10 s per input) is saved to fuzz/crashes/TARGET/ and makes the script
+# fail; turn it into a regression by fixing the bug and moving the file to fuzz/regressions/TARGET/.
 #   fuzz/run.sh [SECONDS]            all targets
 #   TARGETS="mesh pcd" fuzz/run.sh 30
 # Results (executions, corpus size, crashes per target) go to build-fuzz/fuzz-results.md.

@@ -38,7 +38,6 @@ Normalized thin(const Normalized& s, int max) {
   return out;
 }
 
-
 /// An axis-model start: axis, point on it, radius there, half angle (0 for a cylinder).
 struct AxisStart {
   Vector3d a, p;

@@ -120,8 +120,7 @@ double levenberg_marquardt(Model& model, int max_iterations = kMaxIterations) {
         J.col(j) = (r_try - r) / h;
       }
     }
-    // Normal equations row by row: with k ≤ 6 columns this beats a general matrix product, whose
-    // packing dominates for such thin matrices.
+    // Normal equations accumulated row by row (k ≤ 6 columns, fixed size).
     Mat A = Mat::Zero();
     Vec g = Vec::Zero();
     for (int i = 0; i < m; ++i) {
