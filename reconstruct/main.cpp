@@ -88,7 +88,7 @@ int main(int argc, char** argv) {
     report.json()["views"] = views;
     report.parameters() = {{"input", inputs}, {"output", output}, {"method", method}, {"register", registration},
                            {"voxel_mm", r.voxel_mm},
-                           {"poisson_depth", r.poisson_depth}, {"trim_mm", r.trim_mm},
+                           {"poisson_depth", r.poisson_depth}, {"poisson_block_depth", r.poisson_block_depth}, {"trim_mm", r.trim_mm},
                            {"normal_neighbours", o.normal_neighbours}, {"outlier_sigma", o.outlier_sigma}, {"mls_radius_mm", r.mls_radius_mm}};
     report.counts() = {{"frames", r.frames}, {"points_in", r.points_in}, {"points_fused", r.points_fused},
                        {"outliers_removed", r.outliers_removed}, {"spacing_mm", r.spacing_mm},

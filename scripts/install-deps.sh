@@ -20,7 +20,7 @@ pkgs=(
 )
 for arg in "$@"; do
   case "$arg" in
-    --bench) pkgs+=(python3-open3d libopenvdb-dev hyperfine) ;;
+    --bench) pkgs+=(python3-open3d python3-opencv libopenvdb-dev hyperfine) ;;
     --fuzz) pkgs+=(clang libclang-rt-14-dev) ;;
     *) echo "install-deps: unknown option $arg (--bench, --fuzz)" >&2; exit 2 ;;
   esac

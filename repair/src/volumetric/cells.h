@@ -21,36 +21,41 @@ struct Cell {
   bool inside(int c) const { return (mask >> c) & 1; }
 };
 
+/// Calls f(cell) for every complete cell with a sign change that block `bi` owns (whose corner 0
+/// is in it).
+template <class F>
+void for_each_crossing_cell_of_block(const SparseGrid& grid, std::size_t bi, F&& f) {
+  constexpr int S = SparseGrid::kSide;
+  const Eigen::Vector3i bc = grid.block_coords(bi);
+  // The block and its 7 upper neighbours hold every corner of the cells this block owns.
+  const SparseGrid::Block* nb[8];
+  for (int n = 0; n < 8; ++n) nb[n] = grid.find_block(bc + Eigen::Vector3i(n & 1, (n >> 1) & 1, (n >> 2) & 1));
+  for (int li = 0; li < SparseGrid::kCount; ++li) {
+    const Eigen::Vector3i l = SparseGrid::local_coords(li);
+    Cell cell;
+    cell.min = bc * S + l;
+    bool complete = true;
+    for (int c = 0; c < 8 && complete; ++c) {
+      const Eigen::Vector3i q = l + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1);
+      const SparseGrid::Block* blk = nb[(q.x() >= S) | ((q.y() >= S) << 1) | ((q.z() >= S) << 2)];
+      if (!blk) {
+        complete = false;
+        break;
+      }
+      const int qi = SparseGrid::local_index(q);
+      complete = blk->flags[qi] & kInBand;
+      cell.block[c] = blk;
+      cell.local[c] = qi;
+      if (blk->flags[qi] & kInside) cell.mask |= 1 << c;
+    }
+    if (complete && cell.mask != 0 && cell.mask != 255) f(cell);
+  }
+}
+
 /// Calls f(cell) for every complete cell with a sign change, block by block.
 template <class F>
 void for_each_crossing_cell(const SparseGrid& grid, F&& f) {
-  constexpr int S = SparseGrid::kSide;
-  for (std::size_t bi = 0; bi < grid.block_count(); ++bi) {
-    const Eigen::Vector3i bc = grid.block_coords(bi);
-    // The block and its 7 upper neighbours hold every corner of the cells this block owns.
-    const SparseGrid::Block* nb[8];
-    for (int n = 0; n < 8; ++n) nb[n] = grid.find_block(bc + Eigen::Vector3i(n & 1, (n >> 1) & 1, (n >> 2) & 1));
-    for (int li = 0; li < SparseGrid::kCount; ++li) {
-      const Eigen::Vector3i l = SparseGrid::local_coords(li);
-      Cell cell;
-      cell.min = bc * S + l;
-      bool complete = true;
-      for (int c = 0; c < 8 && complete; ++c) {
-        const Eigen::Vector3i q = l + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1);
-        const SparseGrid::Block* blk = nb[(q.x() >= S) | ((q.y() >= S) << 1) | ((q.z() >= S) << 2)];
-        if (!blk) {
-          complete = false;
-          break;
-        }
-        const int qi = SparseGrid::local_index(q);
-        complete = blk->flags[qi] & kInBand;
-        cell.block[c] = blk;
-        cell.local[c] = qi;
-        if (blk->flags[qi] & kInside) cell.mask |= 1 << c;
-      }
-      if (complete && cell.mask != 0 && cell.mask != 255) f(cell);
-    }
-  }
+  for (std::size_t bi = 0; bi < grid.block_count(); ++bi) for_each_crossing_cell_of_block(grid, bi, f);
 }
 
 /// Key of the grid edge from global vertex `ijk` along `axis` (20 bits per coordinate).

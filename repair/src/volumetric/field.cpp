@@ -206,6 +206,11 @@ void classify_by_winding(const TriangleSoup& soup, const SurfaceQuery& query, do
   };
   // Quantisation can shorten each stored distance by up to √3·quantum: keep the test conservative.
   const double slack = h * (1 + 1e-6) + 2e-4 * h;
+  // A vertex this close to the surface is linked to no neighbour across which the surface might
+  // pass: a ray starting on the surface can miss it in float arithmetic, and one such missed
+  // crossing joined inside and outside of abc_00000009 at 512³ into one region, which made every
+  // band vertex need its own winding number (70 s instead of 4). It forms its own region.
+  constexpr double kOnSurface = 1e-3;
   std::vector<std::uint8_t> linked(nb * N, 0);  // bit a: no surface between it and its +a neighbour
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 2), [&](const auto& range) {
     for (std::size_t bi = range.begin(); bi != range.end(); ++bi) {
@@ -219,7 +224,9 @@ void classify_by_winding(const TriangleSoup& soup, const SurfaceQuery& query, do
           if (nbi < 0) continue;
           const auto& other = grid.block(static_cast<std::size_t>(nbi));
           if (!(other.flags[ni] & kInBand)) continue;
-          bool connected = d1 + grid.vector(other, ni).norm() > slack;
+          const double d2 = grid.vector(other, ni).norm();
+          bool connected = d1 + d2 > slack;
+          if (!connected && std::min(d1, d2) < kOnSurface * h) continue;  // see kOnSurface
           if (!connected) {
             const Eigen::Vector3d p = grid.position(base + SparseGrid::local_coords(i));
             connected = !query.raycast(p, Eigen::Vector3d::Unit(a), 0, h);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 #include <vector>
 
@@ -126,25 +127,46 @@ void triangulate_loop(TriangleSoup& out, const std::vector<int>& ids, const std:
 
 }  // namespace
 
-TriangleSoup marching_cubes(const SparseGrid& grid, Interp interp, VolumetricStats& stats) {
+TriangleSoup marching_cubes(SparseGrid&& grid, Interp interp, VolumetricStats& stats) {
   TriangleSoup out;
-  std::unordered_map<std::uint64_t, int> edge_vertex;
-  edge_vertex.reserve(stats.band_vertices / 2 + 16);
   const auto& cases = mc::cases();
+  // Blocks come sorted by z (SparseGrid::allocate). A block at z is read by the cells of the
+  // blocks at z − 1 and z, and an edge's vertex is keyed by its lower corner, which lies in the
+  // owner's z-slab or the next: two slabs of edge vertices and of blocks are all that is live.
+  std::unordered_map<std::uint64_t, int> edge_vertex[2];
+  std::vector<std::size_t> done;  // blocks of slabs the sweep has left, freed when it moves on
+  int slab = std::numeric_limits<int>::min();
   std::vector<int> ids;
-  for_each_crossing_cell(grid, [&](const Cell& cell) {
-    for (const auto& loop : cases[cell.mask].loops) {
-      ids.clear();
-      for (int e : loop) {
-        const auto& edge = mc::edges()[e];
-        const auto [it, inserted] =
-            edge_vertex.emplace(grid_edge_key(cell.corner(edge.a), edge.axis), static_cast<int>(out.vertices.size()));
-        if (inserted) out.vertices.push_back(crossing_point(grid, cell, e, interp, stats));
-        ids.push_back(it->second);
+  for (std::size_t bi = 0; bi < grid.block_count(); ++bi) {
+    const int z = grid.block_coords(bi).z();
+    if (z != slab) {
+      // Moving on from slab `slab`: no cell asks for an edge or a block below z any more.
+      if (z == slab + 1) {
+        edge_vertex[slab & 1] = {};  // becomes slab z + 1's
+      } else {
+        edge_vertex[0] = {};
+        edge_vertex[1] = {};
       }
-      triangulate_loop(out, ids, loop);
+      for (std::size_t b : done) grid.release(b);
+      done.clear();
+      slab = z;
     }
-  });
+    for_each_crossing_cell_of_block(grid, bi, [&](const Cell& cell) {
+      for (const auto& loop : cases[cell.mask].loops) {
+        ids.clear();
+        for (int e : loop) {
+          const auto& edge = mc::edges()[e];
+          const Eigen::Vector3i corner = cell.corner(edge.a);
+          auto& map = edge_vertex[(corner.z() >> SparseGrid::kBits) & 1];
+          const auto [it, inserted] = map.emplace(grid_edge_key(corner, edge.axis), static_cast<int>(out.vertices.size()));
+          if (inserted) out.vertices.push_back(crossing_point(grid, cell, e, interp, stats));
+          ids.push_back(it->second);
+        }
+        triangulate_loop(out, ids, loop);
+      }
+    });
+    done.push_back(bi);
+  }
   stats.triangles = out.faces.size();
   return out;
 }

@@ -7,7 +7,9 @@
 
 namespace s2c::repair {
 
-TriangleSoup marching_cubes(const SparseGrid& grid, Interp interp, VolumetricStats& stats);
+/// Consumes the grid: blocks are freed as the sweep (in z) leaves them behind, so that the grid
+/// and the growing mesh are not both whole in memory (at 1024³ each is some 500 MB).
+TriangleSoup marching_cubes(SparseGrid&& grid, Interp interp, VolumetricStats& stats);
 
 /// The paper's edge point: the parameter λ ∈ [0, 1] of the point of edge V1→V2 closest to the
 /// segment A→B (A, B the closest surface points of V1, V2). Returns false when the edge and AB are

@@ -61,6 +61,7 @@ class SparseGrid {
   static Eigen::Vector3i local_coords(int i) { return {i & (kSide - 1), (i >> kBits) & (kSide - 1), i >> (2 * kBits)}; }
 
   /// Creates the blocks (empty vertices) for the given keys; call before filling, not concurrently.
+  /// Blocks keep the order of `block_coords` (sorted by key, that is by z, then y, then x).
   void allocate(const std::vector<Eigen::Vector3i>& block_coords) {
     blocks_.reserve(block_coords.size());
     for (const auto& b : block_coords) {
@@ -75,6 +76,10 @@ class SparseGrid {
   const Block& block(std::size_t i) const { return *blocks_[i]; }
   const Eigen::Vector3i& block_coords(std::size_t i) const { return coords_[i]; }
   std::size_t bytes() const { return blocks_.size() * (sizeof(Block) + sizeof(Eigen::Vector3i) + 32); }
+
+  /// Frees a block's storage; find_block then returns nullptr for it. For sweeps that are done
+  /// with part of the grid (Marching Cubes frees the z-slabs behind it).
+  void release(std::size_t i) { blocks_[i].reset(); }
 
   /// Index of the block at these block coordinates, or -1.
   std::int64_t find_index(const Eigen::Vector3i& block) const {

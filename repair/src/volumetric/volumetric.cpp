@@ -2,9 +2,11 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -20,12 +22,21 @@ namespace s2c::repair {
 
 namespace {
 
+/// Edges used by one face only. Sorted keys, not a hash map: a 1024³-equivalent extraction has
+/// some 18 M edges, which a node-based map holds in ~45 B each against 8 here.
 std::size_t open_edges(const TriangleSoup& s) {
-  std::unordered_map<std::uint64_t, int> count;
+  std::vector<std::uint64_t> keys;
+  keys.reserve(3 * s.faces.size());
   for (const auto& f : s.faces)
-    for (int k = 0; k < 3; ++k) ++count[undirected_edge_key(f[k], f[(k + 1) % 3])];
+    for (int k = 0; k < 3; ++k) keys.push_back(undirected_edge_key(f[k], f[(k + 1) % 3]));
+  std::sort(keys.begin(), keys.end());
   std::size_t open = 0;
-  for (const auto& [e, n] : count) open += n == 1;
+  for (std::size_t i = 0; i < keys.size();) {
+    std::size_t j = i + 1;
+    while (j < keys.size() && keys[j] == keys[i]) ++j;
+    open += j - i == 1;
+    i = j;
+  }
   return open;
 }
 
@@ -39,10 +50,11 @@ double surface_area(const TriangleSoup& s) {
 }  // namespace
 
 double volumetric_memory_estimate(double area, double h, double band) {
-  // Band vertices ≈ the surface's cells times the band's thickness (2·band voxels); peak memory per
-  // band vertex (closest point, sign, blocks, the extracted mesh) measured 65–84 B (bench/README.md
-  // "Repair", memory rows). 55 B per cell of thickness over-estimates the bracket at 1024³ by 25%
-  // (1.02 GB against 0.81 GB peak RSS): refusing a grid that would have fitted is the safer error.
+  // Band vertices ≈ the surface's cells times the band's thickness (2·band voxels). Peak RSS per
+  // such cell at 1024³ (bench/README.md "Repair", memory rows): 48 B on the bracket, 60 B on
+  // abc_00000009 (the sign's union-find over every vertex of the band's blocks, then the extracted
+  // mesh, which Marching Cubes grows while it frees the grid behind its sweep). 55 B is their middle:
+  // an estimate, not a bound; the limit it guards is 80 % of the machine's memory.
   const double surface_cells = area / (h * h);
   return surface_cells * 2.0 * band * 55.0;
 }
@@ -97,19 +109,22 @@ TriangleSoup volumetric_remesh(const TriangleSoup& input, const VolumetricOption
     // CAD faces sit at round coordinates; a grid plane through a face puts vertices exactly on the
     // surface, where inside/outside is a coin toss. An odd fraction of a voxel keeps them apart.
     const Eigen::Vector3d origin = box.min - Eigen::Vector3d::Constant((std::ceil(attempt.band) + 2 + 0.3719) * h);
-    SparseGrid grid(origin, h, radius);
     VolumetricStats st;
     st.voxel = h;
-    auto t0 = std::chrono::steady_clock::now();
-    build_vector_field(input, query, radius, grid, st);
-    st.seconds_field = seconds_since(t0);
-    t0 = std::chrono::steady_clock::now();
-    classify_inside(input, query, options.sign, attempt.shell, grid, st);
-    st.seconds_sign = seconds_since(t0);
-    t0 = std::chrono::steady_clock::now();
-    out = options.extract == Extract::dc ? dual_contouring(grid, input, query, options.interp, st)
-                                         : marching_cubes(grid, options.interp, st);
-    st.seconds_extract = seconds_since(t0);
+    {  // the grid is freed before the closure test: at 1024³ both are hundreds of MB
+      SparseGrid grid(origin, h, radius);
+      auto t0 = std::chrono::steady_clock::now();
+      build_vector_field(input, query, radius, grid, st);
+      st.seconds_field = seconds_since(t0);
+      t0 = std::chrono::steady_clock::now();
+      classify_inside(input, query, options.sign, attempt.shell, grid, st);
+      st.seconds_sign = seconds_since(t0);
+      t0 = std::chrono::steady_clock::now();
+      out = TriangleSoup{};  // the previous attempt's mesh
+      out = options.extract == Extract::dc ? dual_contouring(grid, input, query, options.interp, st)
+                                           : marching_cubes(std::move(grid), options.interp, st);
+      st.seconds_extract = seconds_since(t0);
+    }
     st.attempts = stats.attempts + 1;
     st.band = attempt.band;
     st.shell = attempt.shell;

@@ -35,6 +35,7 @@ struct ReconstructReport {
   std::size_t points_in = 0, points_fused = 0, outliers_removed = 0;
   double spacing_mm = 0, voxel_mm = 0, trim_mm = 0, mls_radius_mm = 0;
   int poisson_depth = 0;
+  int poisson_block_depth = 0;  ///< Poisson solves and extracts in blocks of this octree depth
   std::size_t faces_before_trim = 0, faces = 0, vertices = 0;
 };
 
