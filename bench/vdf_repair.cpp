@@ -205,8 +205,10 @@ int run_remesh(const std::string& in_path, const std::string& out_path, double d
   VolumetricStats st;
   const TriangleSoup out = volumetric_remesh(in, o, &st);
   const s2c::CheckResult c = s2c::check_mesh(out);
-  std::printf("%s\nregions %zu mixed %zu winding evaluations %zu attempts %d shell %g\n", s2c::to_json(c).c_str(),
-              st.sign_regions, st.sign_regions_mixed, st.sign_queries, st.attempts, st.shell);
+  std::printf("%s\nregions %zu mixed %zu winding evaluations %zu attempts %d shell %g\n"
+              "seconds field %.3f sign %.3f extract %.3f, band vertices %zu, blocks %zu\n",
+              s2c::to_json(c).c_str(), st.sign_regions, st.sign_regions_mixed, st.sign_queries, st.attempts, st.shell,
+              st.seconds_field, st.seconds_sign, st.seconds_extract, st.band_vertices, st.blocks);
   for (const auto& [fa, fb] : c.intersecting_pairs) {
     std::printf("pair %d %d\n", fa, fb);
     for (int f : {fa, fb})

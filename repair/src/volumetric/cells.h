@@ -15,6 +15,7 @@ struct Cell {
   Eigen::Vector3i min;  ///< global index of corner 0
   int mask = 0;         ///< bit c: corner c inside
   std::array<const SparseGrid::Block*, 8> block;
+  std::array<std::int64_t, 8> block_index;  ///< of each corner's block in the grid
   std::array<int, 8> local;
 
   Eigen::Vector3i corner(int c) const { return min + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1); }
@@ -29,7 +30,11 @@ void for_each_crossing_cell_of_block(const SparseGrid& grid, std::size_t bi, F&&
   const Eigen::Vector3i bc = grid.block_coords(bi);
   // The block and its 7 upper neighbours hold every corner of the cells this block owns.
   const SparseGrid::Block* nb[8];
-  for (int n = 0; n < 8; ++n) nb[n] = grid.find_block(bc + Eigen::Vector3i(n & 1, (n >> 1) & 1, (n >> 2) & 1));
+  std::int64_t nbi[8];
+  for (int n = 0; n < 8; ++n) {
+    nbi[n] = grid.find_index(bc + Eigen::Vector3i(n & 1, (n >> 1) & 1, (n >> 2) & 1));
+    nb[n] = nbi[n] < 0 ? nullptr : grid.block_if_kept(static_cast<std::size_t>(nbi[n]));
+  }
   for (int li = 0; li < SparseGrid::kCount; ++li) {
     const Eigen::Vector3i l = SparseGrid::local_coords(li);
     Cell cell;
@@ -37,7 +42,8 @@ void for_each_crossing_cell_of_block(const SparseGrid& grid, std::size_t bi, F&&
     bool complete = true;
     for (int c = 0; c < 8 && complete; ++c) {
       const Eigen::Vector3i q = l + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1);
-      const SparseGrid::Block* blk = nb[(q.x() >= S) | ((q.y() >= S) << 1) | ((q.z() >= S) << 2)];
+      const int n = (q.x() >= S) | ((q.y() >= S) << 1) | ((q.z() >= S) << 2);
+      const SparseGrid::Block* blk = nb[n];
       if (!blk) {
         complete = false;
         break;
@@ -45,6 +51,7 @@ void for_each_crossing_cell_of_block(const SparseGrid& grid, std::size_t bi, F&&
       const int qi = SparseGrid::local_index(q);
       complete = blk->flags[qi] & kInBand;
       cell.block[c] = blk;
+      cell.block_index[c] = nbi[n];
       cell.local[c] = qi;
       if (blk->flags[qi] & kInside) cell.mask |= 1 << c;
     }

@@ -1,6 +1,7 @@
 #include "volumetric/field.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <unordered_map>
 
@@ -107,6 +108,62 @@ struct Pseudonormals {
   }
 };
 
+/// The closest point within `radius` for every vertex of block `bi`, from a short list of faces
+/// (CAD meshes, coarse scans): each face visits only the vertices inside its box grown by the
+/// radius, and skips those farther from its plane than the best distance so far. Faces are tried
+/// in list order and the last one at the smallest distance wins, as a plain loop would.
+void closest_from_faces(const TriangleSoup& soup, const std::vector<int>& faces, SparseGrid& grid, std::size_t bi,
+                        double radius, std::size_t& count) {
+  constexpr int S = SparseGrid::kSide, N = SparseGrid::kCount;
+  auto& block = grid.block(bi);
+  const Eigen::Vector3i base = grid.block_coords(bi) * S;
+  const Eigen::Vector3d corner = grid.position(base);
+  const double h = grid.voxel();
+  std::array<double, N> best_d;
+  best_d.fill(radius);
+  std::array<Eigen::Vector3d, N> best;
+  std::array<bool, N> found{};
+  for (int fi : faces) {
+    const auto& f = soup.faces[fi];
+    const Eigen::Vector3d &a = soup.vertices[f[0]], &b = soup.vertices[f[1]], &c = soup.vertices[f[2]];
+    // Vertex index range of the grown box; the margin keeps a vertex at exactly `radius` in.
+    const Eigen::Vector3d lo = (a.cwiseMin(b).cwiseMin(c).array() - radius - corner.array()) / h - 1e-9;
+    const Eigen::Vector3d hi = (a.cwiseMax(b).cwiseMax(c).array() + radius - corner.array()) / h + 1e-9;
+    Eigen::Vector3i from, to;
+    for (int k = 0; k < 3; ++k) {
+      from[k] = static_cast<int>(std::max(0.0, std::ceil(lo[k])));
+      to[k] = static_cast<int>(std::min(double(S - 1), std::floor(hi[k])));
+    }
+    if ((to.array() < from.array()).any()) continue;
+    Eigen::Vector3d n = (b - a).cross(c - a);
+    const double len = n.norm();
+    const bool planar = len > 0;
+    if (planar) n /= len;
+    for (int z = from.z(); z <= to.z(); ++z)
+      for (int y = from.y(); y <= to.y(); ++y)
+        for (int x = from.x(); x <= to.x(); ++x) {
+          const Eigen::Vector3i l(x, y, z);
+          const int i = SparseGrid::local_index(l);
+          const Eigen::Vector3d p = grid.position(base + l);
+          // The distance to the triangle is at least the distance to its plane.
+          if (planar && std::abs(n.dot(p - a)) > best_d[i] * (1 + 1e-12) + 1e-12 * h) continue;
+          const Eigen::Vector3d q = closest_point_on_triangle(p, a, b, c);
+          const double d = (q - p).norm();
+          if (d <= best_d[i]) {
+            best_d[i] = d;
+            best[i] = q;
+            found[i] = true;
+          }
+        }
+  }
+  for (int i = 0; i < N; ++i) {
+    if (!found[i]) continue;
+    grid.set_vector(block, i, best[i] - grid.position(base + SparseGrid::local_coords(i)));
+    block.flags[i] = kInBand;
+    ++count;
+  }
+}
+
 }  // namespace
 
 void build_vector_field(const TriangleSoup& soup, const SurfaceQuery& query, double radius, SparseGrid& grid,
@@ -125,29 +182,15 @@ void build_vector_field(const TriangleSoup& soup, const SurfaceQuery& query, dou
       // The faces that can be within the band of any vertex of this block. When they are few
       // (CAD meshes, coarse scans), testing them directly beats 512 BVH traversals.
       const std::vector<int> near = query.faces_within(centre, radius + half_diag);
-      const bool direct = near.size() <= 48;
+      if (near.size() <= 48) {
+        closest_from_faces(soup, near, grid, bi, radius, count);
+        continue;
+      }
       for (int i = 0; i < SparseGrid::kCount; ++i) {
         const Eigen::Vector3d p = grid.position(base + SparseGrid::local_coords(i));
-        Eigen::Vector3d best;
-        double best_d = radius;
-        bool found = false;
-        if (direct) {
-          for (int fi : near) {
-            const auto& f = soup.faces[fi];
-            const Eigen::Vector3d q = closest_point_on_triangle(p, soup.vertices[f[0]], soup.vertices[f[1]], soup.vertices[f[2]]);
-            const double d = (q - p).norm();
-            if (d <= best_d) {
-              best_d = d;
-              best = q;
-              found = true;
-            }
-          }
-        } else if (const auto hit = query.closest(p, radius)) {
-          best = hit->point;
-          found = true;
-        }
-        if (!found) continue;
-        grid.set_vector(block, i, best - p);
+        const auto hit = query.closest(p, radius);
+        if (!hit) continue;
+        grid.set_vector(block, i, hit->point - p);
         block.flags[i] = kInBand;
         ++count;
       }
@@ -236,21 +279,59 @@ void classify_by_winding(const TriangleSoup& soup, const SurfaceQuery& query, do
       }
     }
   });
+  // Links inside a block first, blocks in parallel (a union inside one block only writes that
+  // block's entries), then the links across block faces, an eighth of them, in one thread.
   DisjointSets uf(nb * N);
-  for (std::size_t bi = 0; bi < nb; ++bi)
-    for (int i = 0; i < N; ++i)
+  auto unite_links = [&](std::size_t bi, bool across) {
+    for (int i = 0; i < N; ++i) {
+      if (!linked[bi * N + i]) continue;
+      const Eigen::Vector3i l = SparseGrid::local_coords(i);
       for (int a = 0; a < 3; ++a)
-        if (linked[bi * N + i] & (1u << a)) {
+        if ((linked[bi * N + i] & (1u << a)) && (l[a] == S - 1) == across) {
           const auto [nbi, ni] = neighbour(bi, i, a);
           uf.unite(static_cast<int>(bi * N + i), static_cast<int>(nbi * N + ni));
         }
-  linked = {};
-  // Members of each region, in index order.
-  std::unordered_map<int, std::vector<int>> regions;
-  for (std::size_t bi = 0; bi < nb; ++bi)
-    for (int i = 0; i < N; ++i)
-      if (grid.block(bi).flags[i] & kInBand) regions[uf.find(static_cast<int>(bi * N + i))].push_back(static_cast<int>(bi * N + i));
-  uf.parent = {};
+    }
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 8), [&](const auto& range) {
+    for (std::size_t bi = range.begin(); bi != range.end(); ++bi) unite_links(bi, false);
+  });
+  for (std::size_t bi = 0; bi < nb; ++bi) unite_links(bi, true);
+  // swap, not `= {}`: assigning an empty list keeps the capacity (hundreds of MB at 1024³).
+  std::vector<std::uint8_t>().swap(linked);
+  // Members of each region, in index order: one flat array sorted by region (a counting sort),
+  // regions numbered by their first member. A map of vectors cost a third of the sign step.
+  // Two passes over the band vertices in index order: their roots, renumbered to regions; then
+  // their slots in the sorted array (no list of the band vertices is kept: at 1024³ it is 70 MB).
+  auto for_each_band_vertex = [&](auto&& f) {
+    for (std::size_t bi = 0; bi < nb; ++bi)
+      for (int i = 0; i < N; ++i)
+        if (grid.block(bi).flags[i] & kInBand) f(static_cast<int>(bi * N + i));
+  };
+  std::vector<int> region;
+  region.reserve(stats.band_vertices);
+  for_each_band_vertex([&](int v) { region.push_back(uf.find(v)); });
+  std::vector<int>& id = uf.parent;  // roots only from here on: root -> −2 − region
+  for (int r : region) id[r] = -1;
+  int n_regions = 0;
+  for (int& r : region) {
+    if (id[r] == -1) id[r] = -2 - n_regions++;
+    r = -2 - id[r];
+  }
+  std::vector<int>().swap(uf.parent);
+  std::vector<std::size_t> first(static_cast<std::size_t>(n_regions) + 1, 0);
+  for (int r : region) ++first[static_cast<std::size_t>(r) + 1];
+  for (int r = 0; r < n_regions; ++r) first[r + 1] += first[r];
+  std::vector<int> members_of(region.size());
+  {
+    std::vector<std::size_t> fill(first.begin(), first.end() - 1);
+    std::size_t k = 0;
+    for_each_band_vertex([&](int v) { members_of[fill[region[k++]]++] = v; });
+  }
+  std::vector<int>().swap(region);
+  auto members = [&](std::size_t r) {
+    return std::pair<const int*, const int*>(members_of.data() + first[r], members_of.data() + first[r + 1]);
+  };
   auto position = [&](int v) {
     const std::size_t bi = static_cast<std::size_t>(v) / N;
     return grid.position(grid.block_coords(bi) * S + SparseGrid::local_coords(v % N));
@@ -262,26 +343,25 @@ void classify_by_winding(const TriangleSoup& soup, const SurfaceQuery& query, do
   struct Votes {
     int in = 0, out = 0, unsure = 0;
   };
-  std::vector<const std::vector<int>*> region_list;
-  region_list.reserve(regions.size());
-  for (const auto& entry : regions) region_list.push_back(&entry.second);
-  std::vector<Votes> votes(region_list.size());
+  std::vector<Votes> votes(static_cast<std::size_t>(n_regions));
   constexpr std::size_t kSamples = 33;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, region_list.size(), 16), [&](const auto& r) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, votes.size(), 16), [&](const auto& r) {
     for (std::size_t ri = r.begin(); ri != r.end(); ++ri) {
-      const std::vector<int>& members = *region_list[ri];
-      const std::size_t step = std::max<std::size_t>(1, members.size() / kSamples);
+      const auto [begin, end] = members(ri);
+      const std::size_t size = static_cast<std::size_t>(end - begin);
+      const std::size_t step = std::max<std::size_t>(1, size / kSamples);
       Votes& v = votes[ri];
-      for (std::size_t k = 0; k < members.size(); k += step) {
-        const double w = winding(position(members[k]));
+      for (std::size_t k = 0; k < size; k += step) {
+        const double w = winding(position(begin[k]));
         if (std::abs(w - 0.5) < 0.25) ++v.unsure;
         (w >= 0.5 ? v.in : v.out)++;
       }
     }
   });
   std::size_t evaluations = 0, mixed = 0;
-  for (std::size_t ri = 0; ri < region_list.size(); ++ri) {
-    const std::vector<int>& members = *region_list[ri];
+  for (std::size_t ri = 0; ri < votes.size(); ++ri) {
+    const auto [begin, end] = members(ri);
+    const std::size_t size = static_cast<std::size_t>(end - begin);
     const auto [in, out, unsure] = votes[ri];
     evaluations += static_cast<std::size_t>(in + out);
     const bool decisive = unsure == 0 && (in == 0 || out == 0);
@@ -291,7 +371,8 @@ void classify_by_winding(const TriangleSoup& soup, const SurfaceQuery& query, do
       // everything else, including regions that leak through holes the band cannot bridge,
       // counts as outside (+d). Its zero set is closed in the band and never meets itself.
       const bool deep = decisive && in > 0;
-      for (int v : members) {
+      for (const int* it = begin; it != end; ++it) {
+        const int v = *it;
         auto& block = grid.block(static_cast<std::size_t>(v) / N);
         block.flags[v % N] |= deep ? (kShell | kDeep) : kShell;
         set_inside(v, deep || grid.vector(block, v % N).norm() < shell);
@@ -300,17 +381,17 @@ void classify_by_winding(const TriangleSoup& soup, const SurfaceQuery& query, do
       continue;
     }
     if (decisive) {
-      for (int v : members) set_inside(v, in > 0);
+      for (const int* it = begin; it != end; ++it) set_inside(*it, in > 0);
       continue;
     }
     ++mixed;
-    evaluations += members.size();
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, members.size(), 256), [&](const auto& r) {
-      for (std::size_t k = r.begin(); k != r.end(); ++k) set_inside(members[k], winding(position(members[k])) >= 0.5);
+    evaluations += size;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, size, 256), [&, begin = begin](const auto& r) {
+      for (std::size_t k = r.begin(); k != r.end(); ++k) set_inside(begin[k], winding(position(begin[k])) >= 0.5);
     });
   }
   stats.sign_queries = evaluations;
-  stats.sign_regions = regions.size();
+  stats.sign_regions = static_cast<std::size_t>(n_regions);
   stats.sign_regions_mixed = mixed;
 }
 

@@ -4,7 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <unordered_map>
+#include <memory>
 #include <vector>
 
 #include "volumetric/cells.h"
@@ -131,23 +131,22 @@ TriangleSoup marching_cubes(SparseGrid&& grid, Interp interp, VolumetricStats& s
   TriangleSoup out;
   const auto& cases = mc::cases();
   // Blocks come sorted by z (SparseGrid::allocate). A block at z is read by the cells of the
-  // blocks at z − 1 and z, and an edge's vertex is keyed by its lower corner, which lies in the
-  // owner's z-slab or the next: two slabs of edge vertices and of blocks are all that is live.
-  std::unordered_map<std::uint64_t, int> edge_vertex[2];
-  std::vector<std::size_t> done;  // blocks of slabs the sweep has left, freed when it moves on
+  // blocks at z − 1 and z, and an edge's vertex is filed under the block of its lower corner,
+  // which lies in the owner's z-slab or the next: two slabs of blocks and of edge vertices are
+  // all that is live.
+  constexpr int N = SparseGrid::kCount;
+  using EdgeIds = std::array<int, 3 * N>;  // vertex of the +x, +y, +z edge of each block vertex
+  std::vector<std::unique_ptr<EdgeIds>> edge_ids(grid.block_count());
+  std::vector<std::size_t> done;  // blocks of the slab the sweep has left, freed when it moves on
   int slab = std::numeric_limits<int>::min();
   std::vector<int> ids;
   for (std::size_t bi = 0; bi < grid.block_count(); ++bi) {
     const int z = grid.block_coords(bi).z();
     if (z != slab) {
-      // Moving on from slab `slab`: no cell asks for an edge or a block below z any more.
-      if (z == slab + 1) {
-        edge_vertex[slab & 1] = {};  // becomes slab z + 1's
-      } else {
-        edge_vertex[0] = {};
-        edge_vertex[1] = {};
+      for (std::size_t b : done) {
+        grid.release(b);
+        edge_ids[b].reset();
       }
-      for (std::size_t b : done) grid.release(b);
       done.clear();
       slab = z;
     }
@@ -156,11 +155,17 @@ TriangleSoup marching_cubes(SparseGrid&& grid, Interp interp, VolumetricStats& s
         ids.clear();
         for (int e : loop) {
           const auto& edge = mc::edges()[e];
-          const Eigen::Vector3i corner = cell.corner(edge.a);
-          auto& map = edge_vertex[(corner.z() >> SparseGrid::kBits) & 1];
-          const auto [it, inserted] = map.emplace(grid_edge_key(corner, edge.axis), static_cast<int>(out.vertices.size()));
-          if (inserted) out.vertices.push_back(crossing_point(grid, cell, e, interp, stats));
-          ids.push_back(it->second);
+          auto& table = edge_ids[static_cast<std::size_t>(cell.block_index[edge.a])];
+          if (!table) {
+            table = std::make_unique<EdgeIds>();
+            table->fill(-1);
+          }
+          int& id = (*table)[edge.axis * N + cell.local[edge.a]];
+          if (id < 0) {
+            id = static_cast<int>(out.vertices.size());
+            out.vertices.push_back(crossing_point(grid, cell, e, interp, stats));
+          }
+          ids.push_back(id);
         }
         triangulate_loop(out, ids, loop);
       }

@@ -80,6 +80,8 @@ class SparseGrid {
   /// Frees a block's storage; find_block then returns nullptr for it. For sweeps that are done
   /// with part of the grid (Marching Cubes frees the z-slabs behind it).
   void release(std::size_t i) { blocks_[i].reset(); }
+  /// Block i, or nullptr once released.
+  const Block* block_if_kept(std::size_t i) const { return blocks_[i].get(); }
 
   /// Index of the block at these block coordinates, or -1.
   std::int64_t find_index(const Eigen::Vector3i& block) const {
