@@ -31,7 +31,8 @@
 //                  are those groups' ids (groups of groups), value = their mean, rounded to 0.1°.
 // Pair kinds (members sorted):
 //   perpendicular  same family only, and only between neighbours, so the output stays linear:
-//                  planes in `adjacency`; straight lines sharing an end vertex (dropped when both
+//                  planes in `adjacency` (on noisy meshes, min_patch_area > 0, also two planes
+//                  that both touch one small or shapeless patch: a scan's rounded edge); straight lines sharing an end vertex (dropped when both
 //                  lines' directions are fixed by planes, see parallel); axes in `adjacency`. Axes
 //                  are few and a hole's axis is seldom adjacent to the axis it is square to, so
 //                  for every two perpendicular axis parallel classes A, B the pairs
@@ -194,14 +195,14 @@ class Detector {
     line_.assign(n, nullptr);
     nbr_.resize(n);
     std::unordered_map<std::string, int> index;
-    std::vector<char> doubtful(np_, 0);  // patches whose lines take no part either
+    doubtful_.assign(np_, 0);  // patches whose lines take no part either
     for (int i = 0; i < np_; ++i) {
       shape_[i] = usable(f.patches[i].shape);
       if (shape_[i] && !is_surface(shape_[i]->type)) shape_[i].reset();
       if (f.patches[i].area < o.min_patch_area) shape_[i].reset();
       // With a minimum area (noisy meshes), a patch without a usable shape disqualifies its lines
       // just like a small one: its borders are where fitting gave up, not CAD edges.
-      doubtful[i] = o.min_patch_area > 0 && !shape_[i];
+      doubtful_[i] = o.min_patch_area > 0 && !shape_[i];
       area_[i] = f.patches[i].area;
       index.emplace(f.patches[i].id, i);
     }
@@ -221,7 +222,7 @@ class Detector {
     adjacent_.assign(pairs.begin(), pairs.end());
     // A line touching such a patch is as doubtful as the patch.
     for (auto [a, b] : adjacent_)
-      if (a < np_ && b >= np_ && doubtful[a]) shape_[b].reset();
+      if (a < np_ && b >= np_ && doubtful_[a]) shape_[b].reset();
     for (auto [a, b] : adjacent_) {
       nbr_[a].push_back(b);
       nbr_[b].push_back(a);
@@ -317,9 +318,19 @@ class Detector {
     plane_classes_ = classes(planes_, [&](int a, int b) { return parallel(s(a).dir, s(b).dir); });
     add_classes(ConstraintKind::parallel, plane_classes_);
     plane_class_ = class_index(plane_classes_);
-    for (auto [a, b] : adjacent_)
-      if (type(a) == ShapeType::plane && type(b) == ShapeType::plane && perpendicular(s(a).dir, s(b).dir))
-        add(ConstraintKind::perpendicular, {a, b});
+    std::set<std::pair<int, int>> perp;
+    auto try_pair = [&](int a, int b) {
+      if (a != b && type(a) == ShapeType::plane && type(b) == ShapeType::plane && perpendicular(s(a).dir, s(b).dir))
+        perp.emplace(std::min(a, b), std::max(a, b));
+    };
+    for (auto [a, b] : adjacent_) try_pair(a, b);
+    // Noisy meshes: a scan's sharp edge comes out rounded, a strip that no shape fits, so the
+    // two planes it joins do not touch; planes bordering one such doubtful patch are neighbours.
+    for (int c = 0; c < np_; ++c)
+      if (doubtful_[c])
+        for (std::size_t i = 0; i < nbr_[c].size(); ++i)
+          for (std::size_t j = i + 1; j < nbr_[c].size(); ++j) try_pair(nbr_[c][i], nbr_[c][j]);
+    for (auto [a, b] : perp) add(ConstraintKind::perpendicular, {a, b});
   }
 
   void axes() {
@@ -695,6 +706,7 @@ class Detector {
   std::vector<double> area_;
   std::vector<const Line*> line_;
   std::vector<std::vector<int>> nbr_;
+  std::vector<char> doubtful_;  ///< noisy meshes: small or shapeless patches (see the constructor)
   std::vector<std::pair<int, int>> adjacent_;  ///< unique (a < b)
   std::vector<std::pair<int, int>> connected_;  ///< curves sharing an end vertex (a < b)
   std::vector<int> planes_, axes_, spheres_, radial_, straight_, circles_;

@@ -833,6 +833,36 @@ TEST(ConstraintsTest, PatchesBelowTheMinimumAreaOrFreeformAndTheirLinesTakeNoPar
   EXPECT_TRUE(has(p.f, ConstraintKind::equal_radius, {p.id["hole_2"], p.id["hole_3"]}));
 }
 
+TEST(ConstraintsTest, PlanesAcrossARoundedEdgeAreNeighboursOnNoisyMeshes) {
+  // A scan rounds the edge between two square planes into a strip that no shape fits: the
+  // planes then touch only that strip. With a minimum area (noisy meshes) they are neighbours
+  // through it; on a clean mesh (no minimum) only touching planes are.
+  FeatureSet f;
+  auto patch = [&](ShapeType type, const Vector3d& normal, double area) {
+    Patch p;
+    p.id = "P" + std::to_string(f.patches.size());
+    p.area = area;
+    p.shape = make_shape(type, Vector3d::Zero(), normal);
+    f.patches.push_back(p);
+    return p.id;
+  };
+  const std::string top = patch(ShapeType::plane, Vector3d::UnitZ(), 100);
+  const std::string round = patch(ShapeType::freeform, Vector3d::UnitZ(), 4);
+  const std::string side = patch(ShapeType::plane, Vector3d(1, 0, 0.01).normalized(), 100);  // 0.6° off square
+  const std::string far = patch(ShapeType::plane, Vector3d::UnitY(), 100);                    // touches nothing
+  f.adjacency = {{top, round}, {round, side}};
+  ConstraintOptions o;
+  o.diagonal = 100;
+  FeatureSet clean = f;
+  detect_constraints(clean, o);
+  EXPECT_FALSE(has(clean, ConstraintKind::perpendicular, {top, side}));
+  o.min_patch_area = 10.0;
+  detect_constraints(f, o);
+  EXPECT_TRUE(has(f, ConstraintKind::perpendicular, {top, side}));
+  EXPECT_FALSE(has(f, ConstraintKind::perpendicular, {top, far}));
+  EXPECT_FALSE(has(f, ConstraintKind::perpendicular, {side, far}));
+}
+
 TEST(ConstraintsTest, EmptySetGivesNothing) {
   FeatureSet f;
   EXPECT_EQ(detect_constraints(f, {}), 0);
