@@ -32,8 +32,9 @@
 // Pair kinds (members sorted):
 //   perpendicular  same family only, and only between neighbours, so the output stays linear:
 //                  planes in `adjacency` (on noisy meshes, min_patch_area > 0, also two planes
-//                  that both touch one small or shapeless patch: a scan's rounded edge); straight lines sharing an end vertex (dropped when both
-//                  lines' directions are fixed by planes, see parallel); axes in `adjacency`. Axes
+//                  that both touch one small or shapeless patch: a scan's rounded edge);
+//                  straight lines sharing an end vertex (dropped when both lines' directions
+//                  are fixed by planes, see parallel); axes in `adjacency`. Axes
 //                  are few and a hole's axis is seldom adjacent to the axis it is square to, so
 //                  for every two perpendicular axis parallel classes A, B the pairs
 //                  {A₀}×B ∪ A×{B₀} (A₀, B₀ their first members) are stated as well: with the
@@ -320,7 +321,7 @@ class Detector {
     plane_class_ = class_index(plane_classes_);
     std::set<std::pair<int, int>> perp;
     auto try_pair = [&](int a, int b) {
-      if (a != b && type(a) == ShapeType::plane && type(b) == ShapeType::plane && perpendicular(s(a).dir, s(b).dir))
+      if (type(a) == ShapeType::plane && type(b) == ShapeType::plane && perpendicular(s(a).dir, s(b).dir))
         perp.emplace(std::min(a, b), std::max(a, b));
     };
     for (auto [a, b] : adjacent_) try_pair(a, b);

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <unordered_map>
+#include <utility>
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -222,6 +223,50 @@ void classify_by_dot(const TriangleSoup& soup, const SurfaceQuery& query, Sparse
   });
 }
 
+/// Band vertices (index bi·N + i) grouped by region, each group in index order: one flat array
+/// sorted by region (a counting sort), regions numbered by their first member. A map of vectors
+/// cost a third of the sign step.
+struct BandRegions {
+  std::vector<std::size_t> first;  ///< region r is list[first[r] .. first[r + 1])
+  std::vector<int> list;
+  std::size_t count() const { return first.size() - 1; }
+  std::pair<const int*, const int*> members(std::size_t r) const {
+    return {list.data() + first[r], list.data() + first[r + 1]};
+  }
+};
+
+/// The regions of the union-find `uf` (consumed) over the band vertices of `grid`. Two passes over
+/// the band vertices: their roots, renumbered to regions; then their slots in the sorted array
+/// (a list of the band vertices is not kept: at 1024³ it would be 70 MB).
+BandRegions group_regions(const SparseGrid& grid, DisjointSets&& uf, std::size_t band_vertices) {
+  constexpr int N = SparseGrid::kCount;
+  auto for_each_band_vertex = [&](auto&& f) {
+    for (std::size_t bi = 0; bi < grid.block_count(); ++bi)
+      for (int i = 0; i < N; ++i)
+        if (grid.block(bi).flags[i] & kInBand) f(static_cast<int>(bi * N + i));
+  };
+  std::vector<int> region;
+  region.reserve(band_vertices);
+  for_each_band_vertex([&](int v) { region.push_back(uf.find(v)); });
+  std::vector<int>& id = uf.parent;  // roots only from here on: root -> −2 − region
+  for (int r : region) id[r] = -1;
+  int n_regions = 0;
+  for (int& r : region) {
+    if (id[r] == -1) id[r] = -2 - n_regions++;
+    r = -2 - id[r];
+  }
+  std::vector<int>().swap(uf.parent);  // swap, not `= {}`, which keeps the capacity
+  BandRegions out;
+  out.first.assign(static_cast<std::size_t>(n_regions) + 1, 0);
+  for (int r : region) ++out.first[static_cast<std::size_t>(r) + 1];
+  for (int r = 0; r < n_regions; ++r) out.first[r + 1] += out.first[r];
+  out.list.resize(region.size());
+  std::vector<std::size_t> fill(out.first.begin(), out.first.end() - 1);
+  std::size_t k = 0;
+  for_each_band_vertex([&](int v) { out.list[fill[region[k++]]++] = v; });
+  return out;
+}
+
 /// The generalised winding number decides inside/outside, but evaluating it at every band vertex
 /// costs ~100× the distance field. The sign cannot change between two neighbouring vertices
 /// unless the surface passes between them, so the band is cut into regions that no surface
@@ -251,8 +296,9 @@ void classify_by_winding(const TriangleSoup& soup, const SurfaceQuery& query, do
   const double slack = h * (1 + 1e-6) + 2e-4 * h;
   // A vertex this close to the surface is linked to no neighbour across which the surface might
   // pass: a ray starting on the surface can miss it in float arithmetic, and one such missed
-  // crossing joined inside and outside of abc_00000009 at 512³ into one region, which made every
-  // band vertex need its own winding number (70 s instead of 4). It forms its own region.
+  // crossing joined inside and outside of abc_00000009 at 448³ into one region, which made every
+  // band vertex need its own winding number (sign step 38 s for 5.1 M vertices). It forms its
+  // own region.
   constexpr double kOnSurface = 1e-3;
   std::vector<std::uint8_t> linked(nb * N, 0);  // bit a: no surface between it and its +a neighbour
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 2), [&](const auto& range) {
@@ -299,39 +345,7 @@ void classify_by_winding(const TriangleSoup& soup, const SurfaceQuery& query, do
   for (std::size_t bi = 0; bi < nb; ++bi) unite_links(bi, true);
   // swap, not `= {}`: assigning an empty list keeps the capacity (hundreds of MB at 1024³).
   std::vector<std::uint8_t>().swap(linked);
-  // Members of each region, in index order: one flat array sorted by region (a counting sort),
-  // regions numbered by their first member. A map of vectors cost a third of the sign step.
-  // Two passes over the band vertices in index order: their roots, renumbered to regions; then
-  // their slots in the sorted array (no list of the band vertices is kept: at 1024³ it is 70 MB).
-  auto for_each_band_vertex = [&](auto&& f) {
-    for (std::size_t bi = 0; bi < nb; ++bi)
-      for (int i = 0; i < N; ++i)
-        if (grid.block(bi).flags[i] & kInBand) f(static_cast<int>(bi * N + i));
-  };
-  std::vector<int> region;
-  region.reserve(stats.band_vertices);
-  for_each_band_vertex([&](int v) { region.push_back(uf.find(v)); });
-  std::vector<int>& id = uf.parent;  // roots only from here on: root -> −2 − region
-  for (int r : region) id[r] = -1;
-  int n_regions = 0;
-  for (int& r : region) {
-    if (id[r] == -1) id[r] = -2 - n_regions++;
-    r = -2 - id[r];
-  }
-  std::vector<int>().swap(uf.parent);
-  std::vector<std::size_t> first(static_cast<std::size_t>(n_regions) + 1, 0);
-  for (int r : region) ++first[static_cast<std::size_t>(r) + 1];
-  for (int r = 0; r < n_regions; ++r) first[r + 1] += first[r];
-  std::vector<int> members_of(region.size());
-  {
-    std::vector<std::size_t> fill(first.begin(), first.end() - 1);
-    std::size_t k = 0;
-    for_each_band_vertex([&](int v) { members_of[fill[region[k++]]++] = v; });
-  }
-  std::vector<int>().swap(region);
-  auto members = [&](std::size_t r) {
-    return std::pair<const int*, const int*>(members_of.data() + first[r], members_of.data() + first[r + 1]);
-  };
+  const BandRegions regions = group_regions(grid, std::move(uf), stats.band_vertices);
   auto position = [&](int v) {
     const std::size_t bi = static_cast<std::size_t>(v) / N;
     return grid.position(grid.block_coords(bi) * S + SparseGrid::local_coords(v % N));
@@ -343,11 +357,11 @@ void classify_by_winding(const TriangleSoup& soup, const SurfaceQuery& query, do
   struct Votes {
     int in = 0, out = 0, unsure = 0;
   };
-  std::vector<Votes> votes(static_cast<std::size_t>(n_regions));
+  std::vector<Votes> votes(regions.count());
   constexpr std::size_t kSamples = 33;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, votes.size(), 16), [&](const auto& r) {
     for (std::size_t ri = r.begin(); ri != r.end(); ++ri) {
-      const auto [begin, end] = members(ri);
+      const auto [begin, end] = regions.members(ri);
       const std::size_t size = static_cast<std::size_t>(end - begin);
       const std::size_t step = std::max<std::size_t>(1, size / kSamples);
       Votes& v = votes[ri];
@@ -360,7 +374,7 @@ void classify_by_winding(const TriangleSoup& soup, const SurfaceQuery& query, do
   });
   std::size_t evaluations = 0, mixed = 0;
   for (std::size_t ri = 0; ri < votes.size(); ++ri) {
-    const auto [begin, end] = members(ri);
+    const auto [begin, end] = regions.members(ri);
     const std::size_t size = static_cast<std::size_t>(end - begin);
     const auto [in, out, unsure] = votes[ri];
     evaluations += static_cast<std::size_t>(in + out);
@@ -391,7 +405,7 @@ void classify_by_winding(const TriangleSoup& soup, const SurfaceQuery& query, do
     });
   }
   stats.sign_queries = evaluations;
-  stats.sign_regions = static_cast<std::size_t>(n_regions);
+  stats.sign_regions = regions.count();
   stats.sign_regions_mixed = mixed;
 }
 

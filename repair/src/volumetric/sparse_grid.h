@@ -77,7 +77,7 @@ class SparseGrid {
   const Eigen::Vector3i& block_coords(std::size_t i) const { return coords_[i]; }
   std::size_t bytes() const { return blocks_.size() * (sizeof(Block) + sizeof(Eigen::Vector3i) + 32); }
 
-  /// Frees a block's storage; find_block then returns nullptr for it. For sweeps that are done
+  /// Frees a block's storage; block_if_kept then returns nullptr for it. For sweeps that are done
   /// with part of the grid (Marching Cubes frees the z-slabs behind it).
   void release(std::size_t i) { blocks_[i].reset(); }
   /// Block i, or nullptr once released.
@@ -87,10 +87,6 @@ class SparseGrid {
   std::int64_t find_index(const Eigen::Vector3i& block) const {
     const auto it = map_.find(key(block));
     return it == map_.end() ? -1 : it->second;
-  }
-  const Block* find_block(const Eigen::Vector3i& block) const {
-    const auto it = map_.find(key(block));
-    return it == map_.end() ? nullptr : blocks_[it->second].get();
   }
 
  private:
