@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
       "scan2cad-repair"};
   s2c::CommonOptions common;
   s2c::repair::RepairOptions o;
-  std::string input, output, holes = "auto", interp = "vector", sign = "winding", extract = "mc", strategy = "auto";
+  std::string input, output, holes = "auto", interp = "hermite", sign = "winding", extract = "mc", strategy = "auto";
   app.add_option("MESH", input, "Mesh to repair (.ply .stl .obj .off .vtk)")->required();
   app.add_option("-o,--output", output, "Repaired mesh to write (.ply .stl .obj .off)")->required();
   app.add_option("--strategy", strategy,
@@ -44,9 +44,11 @@ int main(int argc, char** argv) {
                  "Memory the volumetric grid may use, GB (default: 80% of this machine's RAM); a finer grid is "
                  "refused up front with the smallest --voxel that fits")
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--interp", interp, "Marching Cubes edge point: vector (the VDF paper's closest point to the "
-                 "segment between closest surface points) or linear (scalar distance baseline)")
-      ->check(CLI::IsMember({"vector", "linear"}))->capture_default_str();
+  app.add_option("--interp", interp, "Volumetric edge point: hermite (the VDF paper's point, then, where the two "
+                 "closest surface points lie on different planes, the crossing with their tangent planes: on the "
+                 "surface at sharp edges), vector (the paper's point alone: closest point of the cube edge to the "
+                 "segment between the closest surface points) or linear (scalar distance baseline)")
+      ->check(CLI::IsMember({"hermite", "vector", "linear"}))->capture_default_str();
   app.add_option("--sign", sign, "Inside/outside: winding (generalised winding number, robust to holes and "
                  "overlaps) or dot (the paper's rule with angle-weighted pseudonormals)")
       ->check(CLI::IsMember({"winding", "dot"}))->capture_default_str();
@@ -68,7 +70,7 @@ int main(int argc, char** argv) {
     o.strategy = strategy == "surface" ? Strategy::surface : strategy == "volumetric" ? Strategy::volumetric : Strategy::automatic;
     o.fill_holes = holes != "none";
     o.fill.method = holes == "rbf" ? FillMethod::rbf : holes == "liepa" ? FillMethod::liepa : FillMethod::automatic;
-    o.volumetric.interp = interp == "linear" ? Interp::linear : Interp::vector;
+    o.volumetric.interp = interp == "linear" ? Interp::linear : interp == "vector" ? Interp::vector : Interp::hermite;
     o.volumetric.sign = sign == "dot" ? SignMode::dot : SignMode::winding;
     o.volumetric.extract = extract == "dc" ? Extract::dc : Extract::mc;
 

@@ -73,6 +73,7 @@ inline std::uint64_t grid_edge_key(const Eigen::Vector3i& ijk, int axis) {
 
 /// Where crossing edge `e` of `cell` meets the surface: the VDF paper's closest point to the
 /// segment between the corners' closest surface points, or linear in the signed distance.
-Eigen::Vector3d crossing_point(const SparseGrid& grid, const Cell& cell, int e, Interp interp, VolumetricStats& stats);
+Eigen::Vector3d crossing_point(const SparseGrid& grid, const Cell& cell, int e, Interp interp, VolumetricStats& stats,
+                               Eigen::Vector3d* normal = nullptr);
 
 }  // namespace s2c::repair

@@ -4,6 +4,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "s2c/core/check.h"
 #include "s2c/core/distance.h"
 #include "volumetric/cells.h"
 
@@ -40,6 +41,30 @@ Eigen::Vector3d place_vertex(const std::vector<const Hermite*>& data, const Eige
   return x.array().max(lo.array() + slack).min(lo.array() + h - slack).matrix();
 }
 
+/// The fallback per cell: where the quadric's vertices make faces intersect (cells at a sharp
+/// feature the sampling does not resolve: a thin wall, two edges in one cell), those vertices go
+/// back to their mass point (a Marching-Cubes-like vertex), a few rounds, each also relaxing the
+/// ring of the vertices relaxed before. What is left is for the caller's check.
+void relax_folds(TriangleSoup& out, const std::vector<Eigen::Vector3d>& mass_points) {
+  std::vector<char> relaxed(out.vertices.size(), 0);
+  for (int round = 0; round < 4; ++round) {
+    const auto pairs = self_intersecting_pairs(out);
+    if (pairs.empty()) return;
+    std::vector<char> bad(out.faces.size(), 0);
+    for (const auto& [a, b] : pairs) bad[a] = bad[b] = 1;
+    // From the second round on, the faces around what was relaxed already go too.
+    for (std::size_t f = 0; f < out.faces.size(); ++f)
+      for (int v : out.faces[f])
+        if (round > 0 && relaxed[v]) bad[f] = 1;
+    for (std::size_t f = 0; f < out.faces.size(); ++f)
+      if (bad[f])
+        for (int v : out.faces[f]) {
+          out.vertices[v] = mass_points[v];
+          relaxed[v] = 1;
+        }
+  }
+}
+
 }  // namespace
 
 TriangleSoup dual_contouring(const SparseGrid& grid, const TriangleSoup& surface, const SurfaceQuery& query,
@@ -55,6 +80,7 @@ TriangleSoup dual_contouring(const SparseGrid& grid, const TriangleSoup& surface
   std::unordered_map<std::uint64_t, CellVertices> cells;
   std::vector<std::pair<std::uint64_t, int>> crossing;  // (edge key, axis-direction sign) to emit
   TriangleSoup out;
+  std::vector<Eigen::Vector3d> mass_points;  // per vertex: the mean of its sheet's crossing points
 
   for_each_crossing_cell(grid, [&](const Cell& cell) {
     CellVertices cv;
@@ -68,12 +94,26 @@ TriangleSoup dual_contouring(const SparseGrid& grid, const TriangleSoup& surface
         auto it = hermite.find(key);
         if (it == hermite.end()) {
           Hermite hd;
-          hd.point = crossing_point(grid, cell, e, interp, stats);
-          // The normal of the face the crossing point is closest to; inside → outside direction
-          // along the edge decides its sign when the face is oriented badly.
-          const auto hit = query.closest(hd.point, 2 * h);
+          Eigen::Vector3d plane_normal = Eigen::Vector3d::Zero();
+          hd.point = crossing_point(grid, cell, e, interp, stats, &plane_normal);
+          auto hit = query.closest(hd.point, 2 * h);
+          // The tangent planes of two closest points model one sharp edge; where a third face or
+          // a corner is near, the point they give may stand off the surface (an outside vertex's
+          // closest point on a convex edge gives a supporting plane, not a face): DC's vertices
+          // then fold. There, the paper's point.
+          if (plane_normal.squaredNorm() > 0 && (!hit || hit->distance > 1e-4 * h)) {
+            plane_normal.setZero();
+            VolumetricStats again;  // this edge is counted already
+            hd.point = crossing_point(grid, cell, e, Interp::vector, again);
+            hit = query.closest(hd.point, 2 * h);
+          }
+          // The normal of the tangent plane the crossing point was put on (at a sharp edge the
+          // closest face is a tie), else of the face the point is closest to; inside → outside
+          // direction along the edge decides its sign when the face is oriented badly.
           Eigen::Vector3d n = Eigen::Vector3d::Unit(edge.axis) * (cell.inside(edge.a) ? 1.0 : -1.0);
-          if (hit) {
+          if (plane_normal.squaredNorm() > 0) {
+            n = plane_normal;
+          } else if (hit) {
             const auto& f = surface.faces[hit->face];
             const Eigen::Vector3d fn = (surface.vertices[f[1]] - surface.vertices[f[0]])
                                            .cross(surface.vertices[f[2]] - surface.vertices[f[0]]);
@@ -88,6 +128,9 @@ TriangleSoup dual_contouring(const SparseGrid& grid, const TriangleSoup& surface
       }
       const int vid = static_cast<int>(out.vertices.size());
       out.vertices.push_back(place_vertex(data, grid.position(cell.min), h));
+      Eigen::Vector3d mass = Eigen::Vector3d::Zero();
+      for (const auto* d : data) mass += d->point;
+      mass_points.push_back(mass / double(data.size()));
       for (int e : loop) cv.of_edge[e] = vid;
     }
     const std::uint64_t ck = grid_edge_key(cell.min, 0);
@@ -138,6 +181,7 @@ TriangleSoup dual_contouring(const SparseGrid& grid, const TriangleSoup& surface
       out.faces.push_back({quad[1], quad[2], quad[3]});
     }
   }
+  relax_folds(out, mass_points);
   stats.triangles = out.faces.size();
   return out;
 }

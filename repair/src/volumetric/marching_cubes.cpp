@@ -32,7 +32,45 @@ bool vector_edge_parameter(const Eigen::Vector3d& v1, const Eigen::Vector3d& v2,
   return true;
 }
 
-Eigen::Vector3d crossing_point(const SparseGrid& grid, const Cell& cell, int e, Interp interp, VolumetricStats& stats) {
+bool tangent_plane_edge_parameter(const Eigen::Vector3d& v1, const Eigen::Vector3d& v2, const Eigen::Vector3d& a,
+                                  const Eigen::Vector3d& na, const Eigen::Vector3d& b, const Eigen::Vector3d& nb,
+                                  bool v1_inside, double& lambda, int* plane) {
+  // f(x) = (x − P)·n ≤ 0 inside the half-space of a tangent plane; along the edge it is linear.
+  auto side = [](const Eigen::Vector3d& x, const Eigen::Vector3d& p, const Eigen::Vector3d& n) { return (x - p).dot(n); };
+  const double scale = (v2 - v1).norm();
+  const double ab = side(b, a, na), ba = side(a, b, nb);
+  // Coplanar (A's plane through B and B's through A): the paper's λ is exact already. Mixed signs
+  // (a curved surface or a corner of more than two planes): no two-plane model fits.
+  const double eps = 1e-6 * scale;
+  // One of them may lie on the other's plane: the closest point of an outside vertex beside a
+  // convex edge is on the edge itself.
+  const bool convex = ab < eps && ba < eps && (ab < -eps || ba < -eps);
+  const bool concave = ab > -eps && ba > -eps && (ab > eps || ba > eps);
+  if (!convex && !concave) return false;
+  // Walk from the inside end to the outside end; each plane's exit parameter along that walk.
+  const Eigen::Vector3d& from = v1_inside ? v1 : v2;
+  const Eigen::Vector3d& to = v1_inside ? v2 : v1;
+  const double inf = std::numeric_limits<double>::infinity();
+  auto exit_of = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
+    const double f0 = side(from, p, n), f1 = side(to, p, n);
+    if (f0 <= 0 && f1 <= 0) return inf;   // never leaves this half-space
+    if (f0 > 0 && f1 > 0) return -inf;    // never in it
+    if (f0 > 0) return std::nan("");      // enters it: the walk would go out → in
+    return f0 / (f0 - f1);
+  };
+  const double ta = exit_of(a, na), tb = exit_of(b, nb);
+  if (std::isnan(ta) || std::isnan(tb)) return false;
+  // A convex edge is the intersection of the half-spaces (the walk leaves at the first exit), a
+  // concave one their union (at the last).
+  const double t = convex ? std::min(ta, tb) : std::max(ta, tb);
+  if (!(t >= 0.0 && t <= 1.0)) return false;
+  lambda = v1_inside ? t : 1.0 - t;
+  if (plane) *plane = t == ta ? 0 : 1;
+  return true;
+}
+
+Eigen::Vector3d crossing_point(const SparseGrid& grid, const Cell& cell, int e, Interp interp, VolumetricStats& stats,
+                               Eigen::Vector3d* normal) {
   const auto& edge = mc::edges()[e];
   const Eigen::Vector3d pa = grid.position(cell.corner(edge.a)), pb = grid.position(cell.corner(edge.b));
   const Eigen::Vector3d va = grid.vector(*cell.block[edge.a], cell.local[edge.a]);
@@ -49,13 +87,28 @@ Eigen::Vector3d crossing_point(const SparseGrid& grid, const Cell& cell, int e, 
   const double sa = value(fa, va, cell.inside(edge.a)), sb = value(fb, vb, cell.inside(edge.b));
   // The scalar baseline: linear in the signed distance (both ends on the surface: midpoint).
   double lambda = sa != sb ? sa / (sa - sb) : 0.5;
-  if (interp == Interp::vector && !shell_a && !shell_b) {
+  if (interp != Interp::linear && !shell_a && !shell_b) {
     double lv;
     if (vector_edge_parameter(pa, pb, pa + va, pb + vb, lv)) {
       if (lv <= 0 || lv >= 1) ++stats.clamped_edges;
       lambda = lv;
     } else {
       ++stats.clamped_edges;  // edge parallel to AB: no unique closest point, keep the linear one
+    }
+    // Beyond the paper: where A and B lie on two different planes (a sharp edge of the input
+    // between the cube edge's ends), segment AB cuts the corner and so does λ; the crossing of
+    // the cube edge with the two tangent planes is on the surface. The outward normal at a
+    // closest point is ±v/|v| (v points outward from an inside vertex).
+    const double la = va.norm(), lb = vb.norm();
+    if (interp == Interp::hermite && la > 0 && lb > 0) {
+      const bool in_a = cell.inside(edge.a), in_b = cell.inside(edge.b);
+      const Eigen::Vector3d na = (in_a ? 1.0 : -1.0) * va / la, nb = (in_b ? 1.0 : -1.0) * vb / lb;
+      double lt;
+      int plane;
+      if (in_a != in_b && tangent_plane_edge_parameter(pa, pb, pa + va, na, pb + vb, nb, in_a, lt, &plane)) {
+        lambda = lt;
+        if (normal) *normal = plane == 0 ? na : nb;
+      }
     }
   }
   // Keep vertices off the grid nodes: a vertex on a node would be touched by several edges'

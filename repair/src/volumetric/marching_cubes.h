@@ -17,4 +17,15 @@ TriangleSoup marching_cubes(SparseGrid&& grid, Interp interp, VolumetricStats& s
 bool vector_edge_parameter(const Eigen::Vector3d& v1, const Eigen::Vector3d& v2, const Eigen::Vector3d& a,
                            const Eigen::Vector3d& b, double& lambda);
 
+/// Beyond the paper (`Interp::hermite`): the parameter of the point where edge V1→V2 leaves the
+/// solid bounded by the tangent planes at A (normal nA) and B (normal nB), both outward — their
+/// intersection where each lies below the other's plane (a convex edge), their union where each
+/// lies above (concave). Exact on a surface made of the two planes. Returns false, λ untouched,
+/// when the planes are one (the paper's λ is exact there), when neither model fits (curved
+/// surface, more planes) or when the edge does not go from inside to outside through them.
+/// `plane` receives which plane the point is on (0: A's, 1: B's).
+bool tangent_plane_edge_parameter(const Eigen::Vector3d& v1, const Eigen::Vector3d& v2, const Eigen::Vector3d& a,
+                                  const Eigen::Vector3d& na, const Eigen::Vector3d& b, const Eigen::Vector3d& nb,
+                                  bool v1_inside, double& lambda, int* plane = nullptr);
+
 }  // namespace s2c::repair

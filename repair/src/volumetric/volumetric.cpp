@@ -155,7 +155,13 @@ double vdf_paper_error(const TriangleSoup& mesh, const TriangleSoup& reference) 
   return std::sqrt(sum / (3 * total));
 }
 
-const char* to_string(Interp i) { return i == Interp::vector ? "vector" : "linear"; }
+const char* to_string(Interp i) {
+  switch (i) {
+    case Interp::vector: return "vector";
+    case Interp::hermite: return "hermite";
+    default: return "linear";
+  }
+}
 const char* to_string(SignMode s) { return s == SignMode::winding ? "winding" : "dot"; }
 const char* to_string(Extract e) { return e == Extract::dc ? "dc" : "mc"; }
 

@@ -87,6 +87,28 @@ TEST(Volumetric, EdgeParameterIsTheClosestPointToTheSegment) {
   EXPECT_FALSE(vector_edge_parameter({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, l));  // parallel
 }
 
+TEST(Volumetric, TangentPlaneEdgePointIsOnACorner) {
+  // The solid x ≤ 0.5 ∩ y ≤ 0 (a convex edge along z). The cube edge from (0, −0.2) inside to
+  // (1, 0.3) outside leaves it where y = 0 (t = 0.4, x = 0.4 < 0.5): A on the plane x = 0.5 (closest
+  // point of the inside end), B on y = 0's edge line… take B on y = 0 at x = 0.5 (the corner).
+  double l = -1;
+  const Eigen::Vector3d v1(0, -0.2, 0), v2(1, 0.3, 0);
+  ASSERT_TRUE(tangent_plane_edge_parameter(v1, v2, {0.5, -0.2, 0}, {1, 0, 0}, {0.5, 0, 0}, {0, 1, 0}, true, l));
+  EXPECT_NEAR(l, 0.4, 1e-12);
+  // The same from the other end (v1 outside): λ measured from v1.
+  ASSERT_TRUE(tangent_plane_edge_parameter(v2, v1, {0.5, 0, 0}, {0, 1, 0}, {0.5, -0.2, 0}, {1, 0, 0}, false, l));
+  EXPECT_NEAR(l, 0.6, 1e-12);
+  // Concave: the union x ≤ 0.5 ∪ y ≤ 0. The edge from (0.2, 0.6) inside to (1, 0.2) outside leaves
+  // x ≤ 0.5 at t = 0.375 and is then outside y ≤ 0 too: it exits at the later plane.
+  ASSERT_TRUE(tangent_plane_edge_parameter({0.2, 0.6, 0}, {1, 0.2, 0}, {0.5, 0.6, 0}, {1, 0, 0}, {1, 0, 0}, {0, 1, 0},
+                                           true, l));
+  EXPECT_NEAR(l, 0.375, 1e-12);
+  // One plane (coplanar A and B): left to the paper's λ.
+  l = -1;
+  EXPECT_FALSE(tangent_plane_edge_parameter({0, -1, 0}, {0, 1, 0}, {0.3, 0, 0}, {0, 1, 0}, {-0.2, 0, 0}, {0, 1, 0}, true, l));
+  EXPECT_EQ(l, -1);
+}
+
 TEST(Volumetric, WindingNumberIsOneInsideZeroOutside) {
   const TriangleSoup s = test::icosphere({0, 0, 0}, 10, 3);
   const WindingNumber w(s);
@@ -108,7 +130,7 @@ void expect_closed_sphere(const TriangleSoup& out, double radius, double tol) {
 
 TEST(Volumetric, RemeshesASphereClosedAndClose) {
   const TriangleSoup s = test::icosphere({0, 0, 0}, 10, 4);
-  for (auto interp : {Interp::vector, Interp::linear})
+  for (auto interp : {Interp::hermite, Interp::vector, Interp::linear})
     for (auto sign : {SignMode::winding, SignMode::dot}) {
       VolumetricOptions o;
       o.voxel = 0.5;
@@ -136,9 +158,14 @@ TEST(Volumetric, VectorInterpolationKeepsACubeSharperThanLinear) {
   const TriangleSoup vec = volumetric_remesh(s, o);
   EXPECT_TRUE(check_mesh(lin).cad_ready);
   EXPECT_TRUE(check_mesh(vec).cad_ready);
-  const double e_lin = vdf_paper_error(lin, s), e_vec = vdf_paper_error(vec, s);
-  // Planar faces are exact either way; at the edges the closest-point segment does better.
+  o.interp = Interp::hermite;
+  const TriangleSoup her = volumetric_remesh(s, o);
+  EXPECT_TRUE(check_mesh(her).cad_ready);
+  const double e_lin = vdf_paper_error(lin, s), e_vec = vdf_paper_error(vec, s), e_her = vdf_paper_error(her, s);
+  // Planar faces are exact either way; at the edges the closest-point segment does better, and the
+  // tangent planes put the edge points on the cube (only its corners, three planes, are left).
   EXPECT_LT(e_vec, e_lin) << "vector " << e_vec << " linear " << e_lin;
+  EXPECT_LT(e_her, 0.5 * e_vec) << "hermite " << e_her << " vector " << e_vec;
 }
 
 TEST(Volumetric, WindingSignClosesASmallHoleAndUnitesOverlaps) {

@@ -12,7 +12,10 @@
 
 namespace s2c::repair {
 
-enum class Interp { vector, linear };
+/// Edge point of the extraction: `vector` the paper's λ; `hermite` λ, then, where the two closest
+/// points lie on different planes (a sharp edge between the cube edge's ends), the crossing of
+/// the cube edge with their tangent planes; `linear` the scalar baseline.
+enum class Interp { vector, linear, hermite };
 /// Surface extraction: Marching Cubes, or dual contouring from the same Hermite data (closest
 /// points + normals) with one vertex per surface sheet of a cell, which keeps sharp edges.
 enum class Extract { mc, dc };
@@ -27,7 +30,7 @@ struct VolumetricOptions {
   double voxel = 0;        ///< grid spacing, mm; 0 = from `resolution`
   int resolution = 0;      ///< cells along the longest box side when voxel = 0; 0 = 256
   double band = 2.0;       ///< narrow-band half width in voxels (at least sqrt(3): every cell the surface crosses)
-  Interp interp = Interp::vector;
+  Interp interp = Interp::hermite;
   SignMode sign = SignMode::winding;
   Extract extract = Extract::mc;
   /// When the surface does not close (a hole wider than the band), retry with a 2.5× wider band,
