@@ -13,13 +13,15 @@
 #   wrap     CGAL 5.5 alpha_wrap_3 (s2c-bench-alpha-wrap, alpha = diag/200, offset = diag/2000) on
 #            each WRAP_INPUTS mesh, then scan2cad repair --strategy volumetric --resolution N for N in
 #            WRAP_RES (ascending; stops at the first N whose Hausdorff to the input is ≤ CGAL's): the
-#            matched-Hausdorff time ratio; once per WRAP_EXTRACT (default "mc dc"). Skipped when s2c-bench-alpha-wrap was not built (no CGAL).
+#            matched-Hausdorff time ratio; once per WRAP_EXTRACT (default "mc dc"), with --decimate
+#            WRAP_DECIMATE (default 0.25, the repair's default; 0 = the extracted mesh as it is).
+#            Skipped when s2c-bench-alpha-wrap was not built (no CGAL).
 #   vdf      s2c-bench-vdf step; s2c-bench-vdf cad VDF_INPUTS --div 256 --band 3;
 #            s2c-bench-vdf memory MESH --div 1024 for each MEMORY_INPUTS (each alone: nothing else runs meanwhile).
 #
 # Environment: PARTS="plate shaft bracket pocket", SEED=1, OUT=DIR (default: a new /tmp directory),
 # SAMPLES=200000 (per surface, for the distances), WRAP_INPUTS (default: the four fixture parts and
-# the CGAL fandisk), WRAP_RES="192 320 448 640 896", WRAP_EXTRACT="mc dc", VDF_INPUTS (default: the fixture parts, cgal_fandisk,
+# the CGAL fandisk), WRAP_RES="192 320 448 640 896", WRAP_EXTRACT="mc dc", WRAP_DECIMATE=0.25, VDF_INPUTS (default: the fixture parts, cgal_fandisk,
 # cgal_part, abc_*), MEMORY_INPUTS (default: bracket.stl and abc_00000009, the widest band at
 # --div 256), REAL=../shared/data/real/cad.
 set -uo pipefail
@@ -156,6 +158,7 @@ if "wrap" in sections:
         inputs = os.environ.get("WRAP_INPUTS", " ".join(default)).split()
         res_list = [int(r) for r in os.environ.get("WRAP_RES", "192 320 448 640 896").split()]
         extracts = os.environ.get("WRAP_EXTRACT", "mc dc").split()
+        decimate = os.environ.get("WRAP_DECIMATE", "0.25")
         rows = []
         for src in inputs:
             name = os.path.basename(src)
@@ -178,7 +181,8 @@ if "wrap" in sections:
                     log(f"[wrap] {name}: ours --extract {extract} --resolution {res}")
                     t = f"{tag}.ours.{extract}{res}"
                     rc, wall, mb = run([f"{bin_}/scan2cad", "repair", src, "-o", f"{out}/{t}.ply", "--strategy", "volumetric",
-                                        "--extract", extract, "--resolution", str(res), "--report", f"{out}/{t}.report.json",
+                                        "--extract", extract, "--resolution", str(res), "--decimate", decimate,
+                                        "--report", f"{out}/{t}.report.json",
                                         "--quiet"], None, f"{out}/{t}.log")
                     rep = load(f"{out}/{t}.report.json") or {}
                     if rc != 0:
@@ -207,7 +211,7 @@ if "wrap" in sections:
                                 f"*{cg['seconds'] / secs:.2f}× (repair step)* | | *{wall_c / wall:.2f}× (wall)* | | | | | | |")
                 else:
                     rows.append(f"| {name} | *ours {extract}: no resolution in {res_list} reached CGAL's Hausdorff* | | | | | | | | | | |")
-        print("### Anchor: CGAL 5.5 alpha_wrap_3 (α = diag/200, offset = diag/2000) vs scan2cad repair --strategy volumetric")
+        print(f"### Anchor: CGAL 5.5 alpha_wrap_3 (α = diag/200, offset = diag/2000) vs scan2cad repair --strategy volumetric --decimate {decimate}")
         print()
         print("Distances to the input mesh. `core s` = VDF field + sign + Marching Cubes (report `seconds_field/sign/extract`); "
               "`repair s` = the whole repair step (volumetric incl. its validation, decimation, final check); CGAL's `seconds` = "

@@ -370,6 +370,8 @@ struct Editor::Impl {
       if (ring.size() < 8) continue;
       const features::Fit fit = refit(s.type, ring, false);
       if (!fit.ok) continue;
+      spdlog::debug("snap {}: {} inner, {} border vertices, axis turned {:.4f}°", fs.patches[q].id, inner[q].size(),
+                    ring.size(), std::acos(std::min(1.0, std::abs(fit.shape.dir.dot(s.dir)))) * 180 / M_PI);
       // On a scan only vertices whose faces lie along the surface move (within 30° of its normal):
       // the steep faces of a rounded edge would fold if their corners moved along the normal.
       const bool clean = fs.patches[q].rms <= kCleanRms;
