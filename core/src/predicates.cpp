@@ -398,7 +398,54 @@ bool straddling_triangles_intersect(const Tri& t, const int st[3], const Tri& u,
 Tri segment_tri(const V3& a, const V3& b) { return {a, b, b}; }
 
 // Faces (v, a, b) and (v, c, d) sharing vertex v: do they share a point other than v?
+// Whether the faces (v, a, b) and (v, c, d), projected along an axis where both are non-flat,
+// meet only at v: their angular sectors at v are then disjoint. If so the faces themselves meet
+// only at v (a second common point w would project into both sectors, onto v only if vw ran
+// along the axis, which a face not flat in that projection cannot contain). A filter in front of
+// the exact 3D tests: in a mesh's flat regions neighbouring faces are nearly coplanar, where
+// orient3d needs its exact expansion, while these 2D signs are clear.
+bool sectors_apart(const V3& v, const V3& a, const V3& b, const V3& c, const V3& d) {
+  const int k = projection_axis(v, a, b);
+  if (k < 0) return false;
+  const V2 pv = drop(v, k), pa = drop(a, k), pb = drop(b, k), pc = drop(c, k), pd = drop(d, k);
+  const int o1 = orient2d(pv, pa, pb), o2 = orient2d(pv, pc, pd);
+  if (o1 == 0 || o2 == 0) return false;
+  // Each sector counter-clockwise from `lo` to `hi` (less than 180°): x is in the closed sector
+  // when it is left of or on v→lo and right of or on v→hi.
+  const V2& lo1 = o1 > 0 ? pa : pb;
+  const V2& hi1 = o1 > 0 ? pb : pa;
+  const V2& lo2 = o2 > 0 ? pc : pd;
+  const V2& hi2 = o2 > 0 ? pd : pc;
+  auto in_sector = [&](const V2& lo, const V2& hi, const V2& x) { return orient2d(pv, lo, x) >= 0 && orient2d(pv, hi, x) <= 0; };
+  // Two such sectors overlap iff one holds a boundary ray of the other.
+  return !in_sector(lo1, hi1, lo2) && !in_sector(lo1, hi1, hi2) && !in_sector(lo2, hi2, lo1);
+}
+
+// Whether the projections of two faces along an axis are strictly separated by the line of one
+// of their edges: the faces are then disjoint (a common point would project into both). The
+// same filter as sectors_apart for faces with no common corner: nearby faces of a flat region
+// are nearly coplanar, where the 3D tests need exact arithmetic.
+bool projections_apart(const Tri& t, const Tri& u) {
+  int k = projection_axis(t[0], t[1], t[2]);
+  if (k < 0) k = projection_axis(u[0], u[1], u[2]);
+  if (k < 0) return false;
+  V2 a[3], b[3];
+  for (int i = 0; i < 3; ++i) a[i] = drop(t[i], k), b[i] = drop(u[i], k);
+  // An edge of one separates when the other's corners are all strictly on its outer side.
+  auto separates = [](const V2* p, const V2* q) {
+    const int o = orient2d(p[0], p[1], p[2]);
+    if (o == 0) return false;
+    for (int i = 0; i < 3; ++i) {
+      const V2 &e0 = p[i], &e1 = p[(i + 1) % 3];
+      if (orient2d(e0, e1, q[0]) * o < 0 && orient2d(e0, e1, q[1]) * o < 0 && orient2d(e0, e1, q[2]) * o < 0) return true;
+    }
+    return false;
+  };
+  return separates(a, b) || separates(b, a);
+}
+
 bool share_beyond_vertex(const V3& v, const V3& a, const V3& b, const V3& c, const V3& d) {
+  if (sectors_apart(v, a, b, c, d)) return false;
   const bool flat1 = collinear(v, a, b), flat2 = collinear(v, c, d);
   if (!flat1 && !flat2) {
     // As CGAL: some point other than v is shared iff an opposite edge touches the other face.
@@ -438,6 +485,9 @@ bool beyond(const V3& a, const V3& b, const V3& c) { return lex_less(a, b) ? lex
 bool share_beyond_edge(const V3& a, const V3& b, const V3& c, const V3& d) {
   if (a == b) return share_beyond_vertex(a, b, c, b, d);
   const int k = projection_axis(a, b, c);
+  // c and d on opposite sides of ab in a projection where (a, b, c) is not flat: the faces meet
+  // only in [a, b], coplanar or not (the argument of sectors_apart); no exact orient3d needed.
+  if (k >= 0 && orient2d_axis(a, b, c, k) * orient2d_axis(a, b, d, k) < 0) return false;
   const bool flat1 = k < 0, flat2 = collinear(a, b, d);
   if (!flat1 && !flat2) {
     // Non-coplanar faces meet only on their common line, i.e. in [a, b]; coplanar ones
@@ -516,7 +566,7 @@ bool faces_self_intersect(const Tri& p, const std::array<int, 3>& pi, const Tri&
         break;
       }
   }
-  if (n == 0) return triangles_intersect(p, q);
+  if (n == 0) return !projections_apart(p, q) && triangles_intersect(p, q);
   if (n == 3) return true;
   if (n == 1) {
     const int i = shared_p[0], j = shared_q[0];

@@ -75,7 +75,7 @@ bool has_directed_edge(const std::array<int, 3>& f, int a, int b) {
 }
 
 /// Breadth-first over manifold edges: a neighbour must traverse the shared edge the other way.
-std::size_t make_consistent(TriangleSoup& soup, const std::unordered_map<std::uint64_t, std::vector<int>>& edges) {
+std::size_t make_consistent(TriangleSoup& soup, const EdgeFaces& edges) {
   std::vector<char> seen(soup.faces.size(), 0);
   std::size_t flipped = 0;
   for (std::size_t seed = 0; seed < soup.faces.size(); ++seed) {
@@ -107,7 +107,7 @@ std::size_t make_consistent(TriangleSoup& soup, const std::unordered_map<std::ui
 
 /// Closed components point outward, or inward when an odd number of other closed components
 /// contains them (cavities in hollow parts).
-std::size_t orient_outward(TriangleSoup& soup, const std::unordered_map<std::uint64_t, std::vector<int>>& edges) {
+std::size_t orient_outward(TriangleSoup& soup, const EdgeFaces& edges) {
   int count = 0;
   const std::vector<int> comp = face_components(soup, count);
   std::vector<char> closed(count, 1);

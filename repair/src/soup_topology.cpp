@@ -1,20 +1,37 @@
 #include "soup_topology.h"
 
+#include <algorithm>
 #include <numeric>
+#include <stdexcept>
 
 #include "s2c/core/disjoint_sets.h"
 #include "s2c/core/predicates.h"
 
 namespace s2c::repair {
 
-std::unordered_map<std::uint64_t, std::vector<int>> edge_faces(const TriangleSoup& soup) {
-  std::unordered_map<std::uint64_t, std::vector<int>> map;
-  map.reserve(soup.faces.size() * 2);
+EdgeFaces::EdgeFaces(const TriangleSoup& soup) {
+  std::vector<std::pair<std::uint64_t, int>> sides;
+  sides.reserve(soup.faces.size() * 3);
   for (std::size_t fi = 0; fi < soup.faces.size(); ++fi) {
     const auto& f = soup.faces[fi];
-    for (int k = 0; k < 3; ++k) map[undirected_key(f[k], f[(k + 1) % 3])].push_back(static_cast<int>(fi));
+    for (int k = 0; k < 3; ++k) sides.emplace_back(undirected_key(f[k], f[(k + 1) % 3]), static_cast<int>(fi));
   }
-  return map;
+  std::sort(sides.begin(), sides.end());
+  faces_.reserve(sides.size());
+  for (std::size_t i = 0; i < sides.size(); ++i) {
+    if (i == 0 || sides[i].first != sides[i - 1].first) {
+      keys_.push_back(sides[i].first);
+      start_.push_back(static_cast<int>(faces_.size()));
+    }
+    faces_.push_back(sides[i].second);
+  }
+  start_.push_back(static_cast<int>(faces_.size()));
+}
+
+EdgeFaces::Faces EdgeFaces::at(std::uint64_t key) const {
+  const auto it = std::lower_bound(keys_.begin(), keys_.end(), key);
+  if (it == keys_.end() || *it != key) throw std::out_of_range("no face has this edge");
+  return faces_of(static_cast<std::size_t>(it - keys_.begin()));
 }
 
 std::vector<int> face_components(const TriangleSoup& soup, int& count) {

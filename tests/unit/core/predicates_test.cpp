@@ -273,6 +273,25 @@ TEST(Predicates, FacesSharedVertexFoldOver) {
   EXPECT_FALSE(faces_sym(Tri{v, a, b}, Ids{0, 1, 2}, Tri{v, V3(-0.3, -0.3, -1), V3(-0.3, -0.3, 1)}, Ids{0, 3, 4}));
 }
 
+TEST(Predicates, FacesNearlyCoplanarAroundAVertex) {
+  // A mesh's flat region: neighbours off the plane by rounding only. Sectors apart in projection
+  // decide without the exact 3D tests; overlapping sectors still go to them.
+  const double up = std::nextafter(0.3, 1.0), down = std::nextafter(0.3, 0.0);  // one ulp off
+  const V3 v(0.1, 0.2, 0.3), a(1.1, 0.2, up), b(0.1, 1.2, down);
+  const V3 c(-0.9, 0.2, up), d(0.1, -0.8, 0.3);
+  EXPECT_FALSE(faces_sym(Tri{v, a, b}, Ids{0, 1, 2}, Tri{v, c, d}, Ids{0, 3, 4}));
+  EXPECT_FALSE(faces_sym(Tri{v, a, b}, Ids{0, 1, 2}, Tri{v, b, c}, Ids{0, 2, 3}));
+  // Overlapping in projection but lifted off the first face everywhere except at v: apart in 3D.
+  EXPECT_FALSE(faces_sym(Tri{v, a, b}, Ids{0, 1, 2}, Tri{v, V3(0.6, 0.7, 0.31), V3(1.1, 0.7, 0.31)}, Ids{0, 3, 4}));
+  // Overlapping in projection, the first face's corners one ulp off the second's plane: the
+  // second face's edge from (0.6, 0.7) to (1.1, 0.7) passes through the first face's interior
+  // only if the first face is not exactly in z = 0.3; it is not (a above, b below): they cross.
+  const Tri flat{v, V3(0.6, 0.7, 0.3), V3(1.1, 0.7, 0.3)};
+  EXPECT_TRUE(faces_sym(Tri{v, a, b}, Ids{0, 1, 2}, flat, Ids{0, 3, 4}));
+  // Sharing an edge, the third corners on opposite sides: apart whatever the rounding.
+  EXPECT_FALSE(faces_sym(Tri{v, a, b}, Ids{0, 1, 2}, Tri{a, v, V3(0.6, -0.8, up)}, Ids{1, 0, 3}));
+}
+
 TEST(Predicates, FacesSharedEdge) {
   const V3 a(0, 0, 0), b(1, 0, 0), c(0.5, 1, 0);
   // Folded flat onto the first face: same side of ab, coplanar.
