@@ -347,16 +347,23 @@ void time_rbf_solve(std::size_t n, std::mt19937& rng) {
 
 int main(int argc, char** argv) {
   int holes = 8;
+  bool rbf_only = false;
   std::string real = std::string(S2C_SHARED_DIR) + "/data/real/cad/cgal_fandisk.off";
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--holes") && i + 1 < argc) holes = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--real") && i + 1 < argc) real = argv[++i];
+    else if (!std::strcmp(argv[i], "--rbf-only")) rbf_only = true;
     else {
-      std::fprintf(stderr, "usage: s2c-bench-holefill [--holes N] [--real MESH]\n");
+      std::fprintf(stderr, "usage: s2c-bench-holefill [--holes N] [--real MESH] [--rbf-only]\n");
       return 2;
     }
   }
   std::mt19937 rng(2024);
+  if (rbf_only) {
+    std::printf("|     N | solver        |        ms |\n|-------|---------------|-----------|\n");
+    for (const std::size_t n : {134u, 268u, 524u, 1000u, 1048u}) time_rbf_solve(n, rng);
+    return 0;
+  }
 #ifdef S2C_HAVE_CGAL
   std::printf("CGAL %s: triangulate_refine_and_fair_hole with default parameters\n", CGAL_VERSION_STR);
 #else
