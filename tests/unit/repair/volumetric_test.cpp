@@ -243,17 +243,27 @@ TEST(Volumetric, EmptyInputIsRejected) {
   test::expect_invalid_input([] { volumetric_remesh(TriangleSoup{}, {}); }, {"no faces"});
 }
 
+/// A mesh of ../shared/data/real/cad (empty when the data is not there) and options for `cells`
+/// voxels across its longest side, band 3.
+TriangleSoup real_cad(const std::string& name) {
+  const auto path = test::shared_dir() / "data/real/cad" / name;
+  return std::filesystem::exists(path) ? read_soup(path) : TriangleSoup{};
+}
+VolumetricOptions across(const TriangleSoup& soup, double cells) {
+  const Bounds b = bounds(soup);
+  VolumetricOptions o;
+  o.voxel = (b.max - b.min).maxCoeff() / cells;
+  o.band = 3;
+  return o;
+}
+
 TEST(Volumetric, VertexOnTheSurfaceDoesNotJoinInsideAndOutside) {
   // At 448 cells across abc_00000009 a grid vertex lies within float rounding of a face: the ray
   // from it to its neighbour missed the face, which linked inside and outside into one band
   // region, and every band vertex then needed its own winding number (38 s instead of 0.5).
-  const auto path = test::shared_dir() / "data/real/cad/abc_00000009_9b3d6a97e8de4aa193b81000_trimesh_001.stl";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << "no " << path;
-  const TriangleSoup soup = read_soup(path);
-  const Bounds b = bounds(soup);
-  VolumetricOptions o;
-  o.voxel = (b.max - b.min).maxCoeff() / 448;
-  o.band = 3;
+  const TriangleSoup soup = real_cad("abc_00000009_9b3d6a97e8de4aa193b81000_trimesh_001.stl");
+  if (soup.faces.empty()) GTEST_SKIP() << "no real data";
+  const VolumetricOptions o = across(soup, 448);
   VolumetricStats st;
   volumetric_remesh(soup, o, &st);
   EXPECT_EQ(st.sign_regions_mixed, 0u);
@@ -264,13 +274,9 @@ TEST(Volumetric, DualContouringRelaxesTheCellsWhoseVerticesFold) {
   // abc_00000007 at 256 cells: the quadric puts a few vertices where their faces cross (7 pairs
   // with the tangent-plane edge points, 11 with the paper's λ); those cells fall back to the mean
   // of their crossing points.
-  const auto path = test::shared_dir() / "data/real/cad/abc_00000007_b33a147f86da49879455d286_trimesh_000.stl";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << "no " << path;
-  const TriangleSoup soup = read_soup(path);
-  const Bounds b = bounds(soup);
-  VolumetricOptions o;
-  o.voxel = (b.max - b.min).maxCoeff() / 256;
-  o.band = 3;
+  const TriangleSoup soup = real_cad("abc_00000007_b33a147f86da49879455d286_trimesh_000.stl");
+  if (soup.faces.empty()) GTEST_SKIP() << "no real data";
+  VolumetricOptions o = across(soup, 256);
   o.extract = Extract::dc;
   const CheckResult c = check_mesh(volumetric_remesh(soup, o));
   EXPECT_EQ(c.self_intersections, 0u);
