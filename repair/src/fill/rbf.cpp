@@ -15,10 +15,50 @@
 #include <Eigen/LU>
 #include <Eigen/QR>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "fill/liepa.h"
 #include "s2c/core/clock.h"
 
 namespace s2c::repair::fill {
+namespace {
+
+/// In-place Cholesky factor (lower triangle) of the SPD matrix K, right-looking by blocks of
+/// `nb` columns. The trailing update A22 −= A21 A21ᵀ carries almost all of the N³/3 flops, and
+/// Eigen runs it on one core (its products go parallel only under OpenMP): here its column panels
+/// are TBB tasks, each one Eigen product. Every entry gets the same operations in the same order
+/// whatever the threads do, so the result is deterministic. Only the lower triangle is read and
+/// meaningful afterwards. False when K is not positive definite.
+bool cholesky_in_place(Eigen::Ref<Eigen::MatrixXd> K, Eigen::Index nb = 96) {
+  const Eigen::Index n = K.rows();
+  for (Eigen::Index k = 0; k < n; k += nb) {
+    const Eigen::Index b = std::min(nb, n - k), r = n - k - b;
+    Eigen::Ref<Eigen::MatrixXd> A11 = K.block(k, k, b, b);
+    const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(A11);
+    if (llt.info() != Eigen::Success) return false;
+    if (r == 0) break;
+    Eigen::Ref<Eigen::MatrixXd> A21 = K.block(k + b, k, r, b);
+    const Eigen::Index w = 64, panels = (r + w - 1) / w;
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, panels, 1), [&](const auto& range) {
+      for (Eigen::Index p = range.begin(); p != range.end(); ++p) {  // A21 L11⁻ᵀ, by row panels
+        auto rows = A21.middleRows(p * w, std::min(w, r - p * w));
+        A11.triangularView<Eigen::Lower>().transpose().solveInPlace<Eigen::OnTheRight>(rows);
+      }
+    });
+    Eigen::Ref<Eigen::MatrixXd> A22 = K.block(k + b, k + b, r, r);
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, panels, 1), [&](const auto& range) {
+      for (Eigen::Index p = range.begin(); p != range.end(); ++p) {
+        const Eigen::Index j = p * w, cols = std::min(w, r - j);
+        A22.block(j, j, r - j, cols).noalias() -= A21.bottomRows(r - j) * A21.middleRows(j, cols).transpose();
+      }
+    });
+  }
+  return true;
+}
+
+}  // namespace
+
 bool CubicRbf::fit(const std::vector<Eigen::Vector3d>& centers, const std::vector<double>& values, RbfSolver solver) {
   const int n = static_cast<int>(centers.size());
   if (n < 5 || values.size() != centers.size()) return false;
@@ -37,13 +77,13 @@ bool CubicRbf::fit(const std::vector<Eigen::Vector3d>& centers, const std::vecto
   const Eigen::Map<const Eigen::VectorXd> h(values.data(), n);
 
   Eigen::MatrixXd phi(n, n);
-  for (int j = 0; j < n; ++j) {
-    phi(j, j) = 0;
-    for (int i = j + 1; i < n; ++i) {
-      const double r = (c_.col(i) - c_.col(j)).norm();
-      phi(i, j) = phi(j, i) = r * r * r;
-    }
-  }
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 32), [&](const auto& range) {  // column j, all rows
+    for (int j = range.begin(); j != range.end(); ++j)
+      for (int i = 0; i < n; ++i) {
+        const double r = (c_.col(i) - c_.col(j)).norm();
+        phi(i, j) = r * r * r;
+      }
+  });
   Eigen::MatrixXd P(n, 4);
   P.col(0).setOnes();
   P.rightCols(3) = c_.transpose();
@@ -74,9 +114,10 @@ bool CubicRbf::fit(const std::vector<Eigen::Vector3d>& centers, const std::vecto
   Eigen::VectorXd qh = h;
   qh.applyOnTheLeft(Q.adjoint());
   Eigen::Ref<Eigen::MatrixXd> K = phi.bottomRightCorner(n - 4, n - 4);
-  const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(K);  // in place: the other blocks stay intact
-  if (llt.info() != Eigen::Success) return false;
-  const Eigen::VectorXd y = llt.solve(qh.tail(n - 4));
+  if (!cholesky_in_place(K)) return false;  // in place: the other blocks stay intact
+  Eigen::VectorXd y = qh.tail(n - 4);
+  K.triangularView<Eigen::Lower>().solveInPlace(y);
+  K.triangularView<Eigen::Lower>().adjoint().solveInPlace(y);
   Eigen::VectorXd z(n);
   z << Eigen::Vector4d::Zero(), y;
   w_ = z;
