@@ -347,14 +347,15 @@ void time_rbf_solve(std::size_t n, std::mt19937& rng) {
 
 int main(int argc, char** argv) {
   int holes = 8;
-  bool rbf_only = false;
+  bool rbf_only = false, solve_table = true;
   std::string real = std::string(S2C_SHARED_DIR) + "/data/real/cad/cgal_fandisk.off";
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--holes") && i + 1 < argc) holes = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--real") && i + 1 < argc) real = argv[++i];
     else if (!std::strcmp(argv[i], "--rbf-only")) rbf_only = true;
+    else if (!std::strcmp(argv[i], "--no-solve-table")) solve_table = false;
     else {
-      std::fprintf(stderr, "usage: s2c-bench-holefill [--holes N] [--real MESH] [--rbf-only]\n");
+      std::fprintf(stderr, "usage: s2c-bench-holefill [--holes N] [--real MESH] [--rbf-only | --no-solve-table]\n");
       return 2;
     }
   }
@@ -406,6 +407,7 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::printf("real mesh skipped: %s\n", e.what());
   }
+  if (!solve_table) return 0;
   std::printf("\nRBF solve (fit of N centres: Φ, factorisation, weights), best of 5, ms\n\n");
   std::printf("|     N | solver        |        ms |\n|-------|---------------|-----------|\n");
   for (const std::size_t n : {134u, 268u, 524u, 1000u, 1048u, 5000u}) time_rbf_solve(n, rng);
