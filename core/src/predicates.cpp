@@ -397,7 +397,6 @@ bool straddling_triangles_intersect(const Tri& t, const int st[3], const Tri& u,
 
 Tri segment_tri(const V3& a, const V3& b) { return {a, b, b}; }
 
-// Faces (v, a, b) and (v, c, d) sharing vertex v: do they share a point other than v?
 // Whether the faces (v, a, b) and (v, c, d), projected along an axis where both are non-flat,
 // meet only at v: their angular sectors at v are then disjoint. If so the faces themselves meet
 // only at v (a second common point w would project into both sectors, onto v only if vw ran
@@ -444,6 +443,7 @@ bool projections_apart(const Tri& t, const Tri& u) {
   return separates(a, b) || separates(b, a);
 }
 
+// Faces (v, a, b) and (v, c, d) sharing vertex v: do they share a point other than v?
 bool share_beyond_vertex(const V3& v, const V3& a, const V3& b, const V3& c, const V3& d) {
   if (sectors_apart(v, a, b, c, d)) return false;
   const bool flat1 = collinear(v, a, b), flat2 = collinear(v, c, d);

@@ -159,7 +159,7 @@ nlohmann::json volumetric_json(const VolumetricOptions& vo, const VolumetricStat
 }
 
 /// Volumetric remeshing of the first candidate input that gives a closed surface free of
-/// self-intersections; the vector interpolation, then the linear one (the closest-point segment
+/// self-intersections; the edge point asked for, then the linear one (the closest-point segment
 /// can fold a triangle where a thin wall puts A and B on different sheets).
 TriangleSoup volumetric_repair(const std::vector<const TriangleSoup*>& inputs, const RepairOptions& o,
                                nlohmann::json& rep) {

@@ -16,12 +16,17 @@ struct Hermite {
   Eigen::Vector3d point, normal;
 };
 
-/// Minimises Σ (n_i·(x − p_i))² around the mass point with small eigenvalues truncated (a flat
-/// sheet pins one direction, an edge two, a corner three); the vertex is clamped to its cell.
-Eigen::Vector3d place_vertex(const std::vector<const Hermite*>& data, const Eigen::Vector3d& lo, double h) {
+/// The mean of the crossing points of one sheet.
+Eigen::Vector3d mass_point(const std::vector<const Hermite*>& data) {
   Eigen::Vector3d mass = Eigen::Vector3d::Zero();
   for (const auto* d : data) mass += d->point;
-  mass /= double(data.size());
+  return mass / double(data.size());
+}
+
+/// Minimises Σ (n_i·(x − p_i))² around the mass point with small eigenvalues truncated (a flat
+/// sheet pins one direction, an edge two, a corner three); the vertex is clamped to its cell.
+Eigen::Vector3d place_vertex(const std::vector<const Hermite*>& data, const Eigen::Vector3d& mass,
+                             const Eigen::Vector3d& lo, double h) {
   Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
   Eigen::Vector3d b = Eigen::Vector3d::Zero();
   for (const auto* d : data) {
@@ -53,9 +58,10 @@ void relax_folds(TriangleSoup& out, const std::vector<Eigen::Vector3d>& mass_poi
     std::vector<char> bad(out.faces.size(), 0);
     for (const auto& [a, b] : pairs) bad[a] = bad[b] = 1;
     // From the second round on, the faces around what was relaxed already go too.
-    for (std::size_t f = 0; f < out.faces.size(); ++f)
-      for (int v : out.faces[f])
-        if (round > 0 && relaxed[v]) bad[f] = 1;
+    if (round > 0)
+      for (std::size_t f = 0; f < out.faces.size(); ++f)
+        for (int v : out.faces[f])
+          if (relaxed[v]) bad[f] = 1;
     for (std::size_t f = 0; f < out.faces.size(); ++f)
       if (bad[f])
         for (int v : out.faces[f]) {
@@ -127,10 +133,8 @@ TriangleSoup dual_contouring(const SparseGrid& grid, const TriangleSoup& surface
         data.push_back(&it->second);
       }
       const int vid = static_cast<int>(out.vertices.size());
-      out.vertices.push_back(place_vertex(data, grid.position(cell.min), h));
-      Eigen::Vector3d mass = Eigen::Vector3d::Zero();
-      for (const auto* d : data) mass += d->point;
-      mass_points.push_back(mass / double(data.size()));
+      mass_points.push_back(mass_point(data));
+      out.vertices.push_back(place_vertex(data, mass_points.back(), grid.position(cell.min), h));
       for (int e : loop) cv.of_edge[e] = vid;
     }
     const std::uint64_t ck = grid_edge_key(cell.min, 0);

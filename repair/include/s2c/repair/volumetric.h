@@ -1,10 +1,10 @@
 #pragma once
 /// \file Volumetric repair with the vector-field distance function (VDF) of
 /// ../shared/papers/vdf-volumetric-repair.txt: every grid vertex of a sparse narrow band stores the
-/// vector to its closest surface point; the surface is re-extracted with Marching Cubes whose edge
-/// point is the closest point on the cube edge to the segment between the two closest points
-/// (the paper's λ), or with linear interpolation of signed distances (`linear`, the scalar
-/// baseline). Whatever the input's defects, the output is closed, manifold and consistently
+/// vector to its closest surface point; the surface is re-extracted with Marching Cubes (or dual
+/// contouring) whose edge point is the closest point on the cube edge to the segment between the
+/// two closest points (the paper's λ), refined at sharp edges by default (`Interp`), or with
+/// linear interpolation of signed distances (`linear`, the scalar baseline). Whatever the input's defects, the output is closed, manifold and consistently
 /// oriented (where the band reaches across every hole).
 #include <cstddef>
 
