@@ -220,8 +220,9 @@ Outcome fill_ours(const Cut& cut, repair::FillMethod m) {
   }
   o.new_points.assign(s.vertices.begin() + static_cast<std::ptrdiff_t>(before), s.vertices.end());
   if (std::getenv("S2C_BENCH_VERBOSE"))
-    std::fprintf(stderr, "rim %zu, new %zu, %s%s\n", cut.hole.loop.size(), o.new_points.size(), r[0].choice.c_str(),
-                 r[0].reason.c_str());
+    std::fprintf(stderr, "rim %zu, new %zu, %.2f ms, RBF solve %.2f ms (%zu centres), %s%s\n", cut.hole.loop.size(),
+                 o.new_points.size(), 1000 * o.seconds, 1000 * r[0].rbf_solve_seconds, r[0].rbf_constraints,
+                 r[0].choice.c_str(), r[0].reason.c_str());
   return o;
 }
 
@@ -284,8 +285,17 @@ struct Tally {
   double ms() const { return ok ? 1000 * seconds / ok : 0; }
 };
 
+std::string g_only;
+
 void run_shape(const char* name, const TriangleSoup& shape, double hole_size, const Distance* exact, int holes,
                std::mt19937& rng) {
+  if (!g_only.empty() && g_only != name) {
+    // Still cut the holes, so that every shape sees the same random holes with or without --only.
+    int made = 0, attempts = 0;
+    Cut cut;
+    while (made < holes && attempts++ < holes * 50) made += cut_hole(shape, rng, hole_size, 2000, cut);
+    return;
+  }
   const char* methods[] = {"rbf", "liepa", "auto", "cgal"};
   Tally t[4];
   int made = 0, attempts = 0;
@@ -308,6 +318,110 @@ void run_shape(const char* name, const TriangleSoup& shape, double hole_size, co
                 t[m].mean_dev(), t[m].dev_max, t[m].ms());
     if (t[3].ok && m < 3 && t[m].ok)
       std::printf(" %6.2f | %6.2f |\n", cgal_dev > 0 ? t[m].mean_dev() / cgal_dev : 0, t[m].ms() / cgal_ms);
+    else
+      std::printf("   —    |   —    |\n");
+  }
+}
+
+// The same kind of holes, `holes` of them in one mesh (vertex-disjoint), filled by one
+// fill_holes call (how `scan2cad repair` fills a mesh's holes: planned in parallel, committed in
+// order) and by CGAL one after the other on one Surface_mesh; time per hole = total / holes.
+void run_shape_together(const char* name, const TriangleSoup& shape, double hole_size, const Distance* exact,
+                        int holes, std::mt19937& rng) {
+  std::vector<Cut> cuts;
+  std::set<int> used;
+  std::vector<char> removed(shape.faces.size(), 0);
+  int attempts = 0;
+  while (static_cast<int>(cuts.size()) < holes && attempts++ < holes * 200) {
+    Cut cut;
+    if (!cut_hole(shape, rng, hole_size, 2000, cut)) continue;
+    bool apart = true;
+    for (int f : cut.removed)
+      for (int c : shape.faces[f]) apart &= !used.count(c);
+    if (!apart) continue;
+    for (int f : cut.removed) {
+      removed[f] = 1;
+      for (int c : shape.faces[f]) used.insert(c);
+    }
+    cuts.push_back(std::move(cut));
+  }
+  TriangleSoup holed;
+  holed.vertices = shape.vertices;
+  std::vector<int> all_removed;
+  for (int f = 0; f < static_cast<int>(shape.faces.size()); ++f) {
+    if (removed[f]) all_removed.push_back(f);
+    else holed.faces.push_back(shape.faces[f]);
+  }
+  std::vector<repair::Hole> list;
+  for (const Cut& c : cuts) list.push_back(c.hole);
+  const Distance d = exact ? *exact : removed_faces_distance(shape, all_removed);
+  const char* methods[] = {"rbf", "liepa", "auto"};
+  Tally t[4];
+  // Times are the best of kRepeats runs on both sides (this 2-core machine's timings spread by
+  // up to 2× from run to run); deviations are the same in every run.
+  constexpr int kRepeats = 3;
+  for (int m = 0; m < 3; ++m) {
+    Outcome o;
+    o.seconds = 1e300;
+    for (int rep = 0; rep < kRepeats; ++rep) {
+      TriangleSoup s = holed;
+      repair::FillOptions opt;
+      opt.method = m == 0 ? repair::FillMethod::rbf : m == 1 ? repair::FillMethod::liepa : repair::FillMethod::automatic;
+      const auto t0 = Clock::now();
+      const auto r = repair::fill_holes(s, list, opt);
+      o.seconds = std::min(o.seconds, seconds_since(t0));
+      o.ok = std::all_of(r.begin(), r.end(), [](const auto& x) { return x.filled; }) && check_mesh(s, CheckOptions{}).cad_ready;
+      o.new_points.assign(s.vertices.begin() + static_cast<std::ptrdiff_t>(holed.vertices.size()), s.vertices.end());
+    }
+    t[m].add(o, d);
+    t[m].ok = o.ok ? static_cast<int>(cuts.size()) : 0;
+    t[m].tried = static_cast<int>(cuts.size());
+  }
+#ifdef S2C_HAVE_CGAL
+  {
+    using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+    using SM = CGAL::Surface_mesh<K::Point_3>;
+    Outcome o;
+    o.seconds = 1e300;
+    for (int rep = 0; rep < kRepeats; ++rep) {
+      SM m;
+      std::vector<SM::Vertex_index> vs;
+      for (const auto& p : holed.vertices) vs.push_back(m.add_vertex(K::Point_3(p.x(), p.y(), p.z())));
+      bool ok = true;
+      for (const auto& f : holed.faces) ok &= m.add_face(vs[f[0]], vs[f[1]], vs[f[2]]) != SM::null_face();
+      double seconds = 0;
+      o.new_points.clear();
+      for (const Cut& c : cuts) {
+        const auto [h, found] = CGAL::halfedge(vs[c.hole.loop[0]], vs[c.hole.loop[1]], m);
+        if (!found || !m.is_border(h)) {
+          ok = false;
+          continue;
+        }
+        std::vector<SM::Face_index> faces;
+        std::vector<SM::Vertex_index> verts;
+        const auto t0 = Clock::now();
+        const auto result = CGAL::Polygon_mesh_processing::triangulate_refine_and_fair_hole(
+            m, h, std::back_inserter(faces), std::back_inserter(verts));
+        seconds += seconds_since(t0);
+        ok &= std::get<0>(result);
+        for (const auto v : verts) o.new_points.push_back({m.point(v).x(), m.point(v).y(), m.point(v).z()});
+      }
+      o.ok = ok;
+      o.seconds = std::min(o.seconds, seconds);
+    }
+    t[3].add(o, d);
+    t[3].ok = o.ok ? static_cast<int>(cuts.size()) : 0;
+    t[3].tried = static_cast<int>(cuts.size());
+  }
+#endif
+  const double cgal_dev = t[3].mean_dev(), cgal_s = t[3].seconds;
+  for (int m = 0; m < 4; ++m) {
+    if (t[m].tried == 0) continue;
+    const double ms = t[m].ok ? 1000 * t[m].seconds / t[m].tried : 0;
+    std::printf("| %-8s | %-5s | %2d/%-2d | %10.5f | %10.5f | %8.2f |", name, m < 3 ? methods[m] : "cgal", t[m].ok,
+                t[m].tried, t[m].mean_dev(), t[m].dev_max, ms);
+    if (t[3].ok && m < 3 && t[m].ok)
+      std::printf(" %6.2f | %6.2f |\n", cgal_dev > 0 ? t[m].mean_dev() / cgal_dev : 0, t[m].seconds / cgal_s);
     else
       std::printf("   —    |   —    |\n");
   }
@@ -348,18 +462,21 @@ void time_rbf_solve(std::size_t n, std::mt19937& rng) {
 int main(int argc, char** argv) {
   int holes = 8;
   bool rbf_only = false, solve_table = true;
+  std::string only;  // one shape: sphere, cylinder, torus or real
   std::string real = std::string(S2C_SHARED_DIR) + "/data/real/cad/cgal_fandisk.off";
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--holes") && i + 1 < argc) holes = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--real") && i + 1 < argc) real = argv[++i];
     else if (!std::strcmp(argv[i], "--rbf-only")) rbf_only = true;
     else if (!std::strcmp(argv[i], "--no-solve-table")) solve_table = false;
+    else if (!std::strcmp(argv[i], "--only") && i + 1 < argc) only = argv[++i];
     else {
-      std::fprintf(stderr, "usage: s2c-bench-holefill [--holes N] [--real MESH] [--rbf-only | --no-solve-table]\n");
+      std::fprintf(stderr, "usage: s2c-bench-holefill [--holes N] [--real MESH] [--only sphere|cylinder|torus|real] [--rbf-only | --no-solve-table]\n");
       return 2;
     }
   }
   std::mt19937 rng(2024);
+  g_only = only;
   if (rbf_only) {
     std::printf("|     N | solver        |        ms |\n|-------|---------------|-----------|\n");
     for (const std::size_t n : {134u, 268u, 524u, 1000u, 1048u}) time_rbf_solve(n, rng);
@@ -370,42 +487,57 @@ int main(int argc, char** argv) {
 #else
   std::printf("CGAL not found: no comparison column\n");
 #endif
-  std::printf("\nDeviation of the new vertices from the true surface (mm), time per hole (ms); %d holes per shape\n\n", holes);
-  std::printf("| shape    | fill  | ok    | mean dev   | max dev    | ms/hole  | dev/CGAL | time/CGAL |\n");
-  std::printf("|----------|-------|-------|------------|------------|----------|--------|--------|\n");
+  struct Shape {
+    const char* name;
+    TriangleSoup soup;
+    double hole_size;
+    Distance distance;  // empty: distance to the removed faces
+  };
+  std::vector<Shape> shapes;
   {
     const double R = 20;
-    const Distance d = [R](const Eigen::Vector3d& p) { return p.norm() - R; };
-    run_shape("sphere", icosphere(R, 5), 6, &d, holes, rng);
+    shapes.push_back({"sphere", icosphere(R, 5), 6, [R](const Eigen::Vector3d& p) { return p.norm() - R; }});
   }
   {
-    const double R = 10;
-    const double H = 60;
-    const Distance d = [R, H](const Eigen::Vector3d& p) {  // to the closed cylinder (side and caps)
+    const double R = 10, H = 60;
+    const auto d = [R, H](const Eigen::Vector3d& p) {  // to the closed cylinder (side and caps)
       const double dr = std::hypot(p.x(), p.y()) - R, dz = std::max(-p.z(), p.z() - H);
       return dr <= 0 && dz <= 0 ? std::max(dr, dz) : std::hypot(std::max(dr, 0.0), std::max(dz, 0.0));
     };
-    const auto s = param_surface(96, 60, false, [R, H](double a, double h) {
-      return Eigen::Vector3d(R * std::cos(2 * M_PI * a), R * std::sin(2 * M_PI * a), H * h);
-    });
-    run_shape("cylinder", s, 5, &d, holes, rng);
+    shapes.push_back({"cylinder", param_surface(96, 60, false, [R, H](double a, double h) {
+                        return Eigen::Vector3d(R * std::cos(2 * M_PI * a), R * std::sin(2 * M_PI * a), H * h);
+                      }), 5, d});
   }
   {
     const double Rt = 20, r = 7;
-    const Distance d = [Rt, r](const Eigen::Vector3d& p) { return std::hypot(std::hypot(p.x(), p.y()) - Rt, p.z()) - r; };
-    const auto s = param_surface(160, 64, true, [Rt, r](double a, double b) {
-      const double ua = 2 * M_PI * a, vb = 2 * M_PI * b;
-      return Eigen::Vector3d((Rt + r * std::cos(vb)) * std::cos(ua), (Rt + r * std::cos(vb)) * std::sin(ua), r * std::sin(vb));
-    });
-    run_shape("torus", s, 4, &d, holes, rng);
+    shapes.push_back({"torus", param_surface(160, 64, true, [Rt, r](double a, double b) {
+                        const double ua = 2 * M_PI * a, vb = 2 * M_PI * b;
+                        return Eigen::Vector3d((Rt + r * std::cos(vb)) * std::cos(ua),
+                                               (Rt + r * std::cos(vb)) * std::sin(ua), r * std::sin(vb));
+                      }), 4,
+                      [Rt, r](const Eigen::Vector3d& p) { return std::hypot(std::hypot(p.x(), p.y()) - Rt, p.z()) - r; }});
   }
   try {
-    const TriangleSoup s = read_soup(real);
+    TriangleSoup s = read_soup(real);
     const double size = 0.06 * bounds(s).diagonal();
-    std::printf("\n(real: %s, hole size %.3g, deviation = distance to the removed faces)\n\n", real.c_str(), size);
-    run_shape("real", s, size, nullptr, holes, rng);
+    shapes.push_back({"real", std::move(s), size, {}});
   } catch (const std::exception& e) {
     std::printf("real mesh skipped: %s\n", e.what());
+  }
+  const char* header =
+      "| shape    | fill  | ok    | mean dev   | max dev    | ms/hole  | dev/CGAL | time/CGAL |\n"
+      "|----------|-------|-------|------------|------------|----------|--------|--------|\n";
+  std::printf("\nDeviation of the new vertices from the true surface (mm; real: %s, hole size 0.06 × diagonal, "
+              "distance to the removed faces), time per hole (ms)\n\n",
+              real.c_str());
+  std::printf("One hole per call, %d holes per shape:\n\n%s", holes, header);
+  for (const Shape& sh : shapes) run_shape(sh.name, sh.soup, sh.hole_size, sh.distance ? &sh.distance : nullptr, holes, rng);
+  std::printf("\n%d vertex-disjoint holes in one mesh, one fill_holes call (CGAL: one call per hole):\n\n%s", holes, header);
+  for (std::size_t k = 0; k < shapes.size(); ++k) {  // each shape its own seed: the same holes with --only
+    const Shape& sh = shapes[k];
+    if (!g_only.empty() && g_only != sh.name) continue;
+    std::mt19937 rng_together(2025 + static_cast<unsigned>(k));
+    run_shape_together(sh.name, sh.soup, sh.hole_size, sh.distance ? &sh.distance : nullptr, holes, rng_together);
   }
   if (!solve_table) return 0;
   std::printf("\nRBF solve (fit of N centres: Φ, factorisation, weights), best of 5, ms\n\n");

@@ -12,6 +12,8 @@
 #include <unordered_set>
 
 #include <Eigen/Eigenvalues>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "fill/liepa.h"
 #include "fill/patch.h"
@@ -101,6 +103,14 @@ bool build_liepa(const TriangleSoup& soup, const MeshIndex& index, Patch& p, con
   return true;
 }
 
+// What the RBF fill did beyond the paper, for the report.
+std::string rbf_detail(const fill::RbfStats& stats) {
+  std::string note;
+  if (stats.smoothed) note += " (noisy rings smoothed)";
+  if (stats.pieces > 1) note += " (" + std::to_string(stats.pieces) + " smooth pieces across creases)";
+  return note;
+}
+
 void commit(TriangleSoup& soup, MeshIndex& index, const Patch& p, FillResult& r) {
   const std::size_t first_face = soup.faces.size();
   const bool normals = !soup.normals.empty() && soup.normals.size() == soup.vertices.size();
@@ -121,87 +131,131 @@ void commit(TriangleSoup& soup, MeshIndex& index, const Patch& p, FillResult& r)
   r.new_faces = p.faces.size();
 }
 
-// One hole: never throws (a failure leaves the hole open with the reason).
-FillResult fill_one(TriangleSoup& soup, MeshIndex& index, const Hole& hole, const FillOptions& options) {
-  FillResult r;
+// One hole's fill up to the point where the soup changes: input checks, method choice and the
+// first method's candidate patches, built against the soup as it is (read only, so the holes of
+// one call can be planned in parallel). finish_hole validates, falls back and commits.
+struct Plan {
+  FillResult result;             ///< filled = false; reason set when the hole cannot be filled
+  bool done = false;             ///< nothing left to try (bad input, or a 3-vertex hole)
+  HoleShape shape;
+  FillMethod first = FillMethod::rbf, second = FillMethod::liepa;
+  std::vector<Patch> candidates;  ///< the first method's, best first
+  std::string why;                ///< why the first method built nothing
+  std::string rbf_note;
+};
+
+Patch make_patch(const TriangleSoup& soup, const std::vector<int>& loop) {
+  Patch p;
+  p.rim = loop;
+  p.base = static_cast<int>(soup.vertices.size());
+  for (int g : loop) p.points.push_back(soup.vertices[g]);
+  return p;
+}
+
+// Builds `m`'s candidates for the hole (never throws: e.g. bad_alloc on an enormous hole).
+void build(const TriangleSoup& soup, const MeshIndex& index, const std::vector<int>& loop, const HoleShape& shape,
+           const FillOptions& options, FillMethod m, std::vector<Patch>& candidates, std::string& why,
+           FillResult& r, std::string& rbf_note) {
+  Patch p = make_patch(soup, loop);
+  p.sigma.assign(loop.size(), shape.edge);
+  try {
+    if (m == FillMethod::liepa) {
+      build_liepa(soup, index, p, shape, options, candidates, why);
+    } else {
+      fill::RbfStats stats;
+      if (fill::rbf_fill(soup, index, p, shape, options, stats, why)) candidates.push_back(std::move(p));
+      r.rbf_constraints = stats.constraints;
+      r.rbf_solve_seconds = stats.solve_seconds;
+      rbf_note = rbf_detail(stats);
+    }
+  } catch (const std::exception& e) {
+    why = e.what();
+  }
+}
+
+Plan plan_hole(const TriangleSoup& soup, const MeshIndex& index, const Hole& hole, const FillOptions& options) {
+  Plan plan;
+  FillResult& r = plan.result;
   const auto& loop = hole.loop;
   const int nv = static_cast<int>(soup.vertices.size());
+  plan.done = true;
   if (loop.size() < 3) {
     r.reason = "hole has fewer than 3 rim vertices";
-    return r;
+    return plan;
   }
   if (options.max_hole_vertices && loop.size() > options.max_hole_vertices) {
     r.reason = "hole has " + std::to_string(loop.size()) + " rim vertices, more than max_hole_vertices";
-    return r;
+    return plan;
   }
   for (std::size_t i = 0; i < loop.size(); ++i) {
     if (loop[i] < 0 || loop[i] >= nv) {
       r.reason = "rim vertex index " + std::to_string(loop[i]) + " out of range";
-      return r;
+      return plan;
     }
     if (loop[i] == loop[(i + 1) % loop.size()]) {
       r.reason = "rim repeats vertex " + std::to_string(loop[i]) + " on consecutive positions";
-      return r;
+      return plan;
     }
     if (!soup.vertices[loop[i]].allFinite()) {
       r.reason = "rim vertex " + std::to_string(loop[i]) + " has non-finite coordinates";
-      return r;
+      return plan;
     }
   }
-  const auto make_patch = [&] {
-    Patch p;
-    p.rim = loop;
-    p.base = nv;
-    for (int g : loop) p.points.push_back(soup.vertices[g]);
-    return p;
-  };
   if (loop.size() == 3) {
-    Patch p = make_patch();
+    Patch p = make_patch(soup, loop);
     p.faces.push_back({0, 1, 2});
     r.method = FillMethod::liepa;
     r.choice = "3-vertex hole: one triangle";
-    r.reason = fill::check_patch(soup, index, p);
-    if (r.reason.empty()) commit(soup, index, p, r);
-    return r;
+    plan.candidates.push_back(std::move(p));
+    return plan;
   }
-  const HoleShape shape = analyse(soup, index, loop, options);
-  FillMethod first = options.method;
-  if (first == FillMethod::automatic) {
+  plan.done = false;
+  plan.shape = analyse(soup, index, loop, options);
+  const HoleShape& shape = plan.shape;
+  plan.first = options.method;
+  if (plan.first == FillMethod::automatic) {
     if (shape.flat_fill) {
-      first = FillMethod::liepa;
+      plan.first = FillMethod::liepa;
       r.choice = "auto: planar rim (" + std::to_string(shape.planarity) + " of diameter), faces " +
                  std::to_string(int(std::lround(shape.wall_angle_deg))) + "° off its plane → liepa, flat";
     } else {
-      first = FillMethod::rbf;
+      plan.first = FillMethod::rbf;
       r.choice = shape.planar ? "auto: planar rim on a curved surface → rbf" : "auto: curved rim → rbf";
     }
   } else {
-    r.choice = std::string("requested ") + to_string(first);
+    r.choice = std::string("requested ") + to_string(plan.first);
   }
-  const FillMethod second = first == FillMethod::rbf ? FillMethod::liepa : FillMethod::rbf;
-  std::string reasons;
-  for (const FillMethod m : {first, second}) {
-    Patch p = make_patch();
-    p.sigma.assign(loop.size(), shape.edge);
-    std::string why;
-    std::vector<Patch> candidates;
-    try {
-      if (m == FillMethod::liepa) {
-        build_liepa(soup, index, p, shape, options, candidates, why);
-      } else {
-        fill::RbfStats stats;
-        if (fill::rbf_fill(soup, index, p, shape, options, stats, why)) candidates.push_back(std::move(p));
-        r.rbf_constraints = stats.constraints;
-        r.rbf_solve_seconds = stats.solve_seconds;
-      }
-    } catch (const std::exception& e) {  // e.g. bad_alloc on an enormous hole
-      why = e.what();
+  plan.second = plan.first == FillMethod::rbf ? FillMethod::liepa : FillMethod::rbf;
+  build(soup, index, loop, shape, options, plan.first, plan.candidates, plan.why, r, plan.rbf_note);
+  return plan;
+}
+
+// The first valid candidate is committed; the second method is tried when none is. Never throws.
+FillResult finish_hole(TriangleSoup& soup, MeshIndex& index, const Hole& hole, const FillOptions& options, Plan plan) {
+  FillResult& r = plan.result;
+  const int nv = static_cast<int>(soup.vertices.size());
+  if (plan.done) {  // bad input (no candidate) or the single triangle
+    for (Patch& c : plan.candidates) {
+      c.base = nv;
+      r.reason = fill::check_patch(soup, index, c);
+      if (r.reason.empty()) commit(soup, index, c, r);
     }
-    for (const Patch& c : candidates) {
+    return r;
+  }
+  std::string reasons;
+  for (const FillMethod m : {plan.first, plan.second}) {
+    std::vector<Patch> own;
+    std::string why = plan.why, rbf_note = plan.rbf_note;
+    if (m != plan.first) build(soup, index, hole.loop, plan.shape, options, m, own, why, r, rbf_note);
+    std::vector<Patch>& candidates = m == plan.first ? plan.candidates : own;
+    for (Patch& c : candidates) {
+      c.base = nv;  // planned before earlier holes of the call added their vertices
       why = fill::check_patch(soup, index, c);
       if (!why.empty()) continue;
       r.method = m;
-      if (m != first) r.choice += "; " + std::string(to_string(first)) + " failed (" + reasons + ") → " + to_string(m);
+      if (m == FillMethod::rbf) r.choice += rbf_note;
+      if (m != plan.first)
+        r.choice += "; " + std::string(to_string(plan.first)) + " failed (" + reasons + ") → " + to_string(m);
       if (&c != &candidates.front()) r.choice += " (unfaired: the faired patch was invalid)";
       r.reason.clear();
       commit(soup, index, c, r);
@@ -209,9 +263,13 @@ FillResult fill_one(TriangleSoup& soup, MeshIndex& index, const Hole& hole, cons
     }
     reasons += (reasons.empty() ? "" : "; ") + std::string(to_string(m)) + ": " + why;
   }
-  r.method = first;
+  r.method = plan.first;
   r.reason = reasons;
   return r;
+}
+
+FillResult fill_one(TriangleSoup& soup, MeshIndex& index, const Hole& hole, const FillOptions& options) {
+  return finish_hole(soup, index, hole, options, plan_hole(soup, index, hole, options));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -343,8 +401,10 @@ std::vector<Loop> repair_pairing(const TriangleSoup& soup, const MeshIndex& inde
 // fill_one, and when that fails on a loop that passes a vertex twice: the loop split at that
 // vertex into two loops, each filled alone (the vertex is then left with two fans, a pinch, but
 // the hole is closed; check_patch allows a vertex that already had several fans to keep them).
-FillResult fill_loop(TriangleSoup& soup, MeshIndex& index, const Hole& hole, const FillOptions& options, int depth) {
-  FillResult r = fill_one(soup, index, hole, options);
+// `plan`, when given, is this loop's plan made before the soup changed (fill_holes).
+FillResult fill_loop(TriangleSoup& soup, MeshIndex& index, const Hole& hole, const FillOptions& options, int depth,
+                     Plan* plan = nullptr) {
+  FillResult r = plan ? finish_hole(soup, index, hole, options, std::move(*plan)) : fill_one(soup, index, hole, options);
   if (r.filled || depth > 8) return r;
   const auto& loop = hole.loop;
   const int n = static_cast<int>(loop.size());
@@ -386,6 +446,25 @@ std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& 
   // Per input hole: the loops it is the primary source of (normally exactly its own loop).
   std::vector<std::vector<const Loop*>> by_hole(holes.size());
   for (const Loop& l : loops) by_hole[static_cast<std::size_t>(l.sources.front())].push_back(&l);
+  // The holes that are one unchanged input loop are planned (method choice and candidate patches,
+  // the expensive part) in parallel against the input; validation and commit stay in hole order,
+  // so later holes are checked against earlier patches. Every plan depends only on the input:
+  // the result is the same whatever the threads do.
+  std::vector<std::size_t> simple;
+  for (std::size_t h = 0; h < holes.size(); ++h)
+    if (by_hole[h].size() == 1 && by_hole[h][0]->note.empty()) simple.push_back(h);
+  std::vector<Plan> plans(holes.size());
+  std::vector<char> planned(holes.size(), 0);
+  if (simple.size() > 1)
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, simple.size(), 1), [&](const auto& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        const std::size_t h = simple[i];
+        const auto t0 = std::chrono::steady_clock::now();
+        plans[h] = plan_hole(soup, index, holes[h], options);
+        planned[h] = 1;
+        seconds[h] = seconds_since(t0);
+      }
+    });
   for (std::size_t h = 0; h < holes.size(); ++h) {
     if (by_hole[h].empty()) continue;  // merged into an earlier hole, reported below
     const auto t0 = std::chrono::steady_clock::now();
@@ -394,7 +473,7 @@ std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& 
     for (const Loop* l : by_hole[h]) {
       Hole piece = holes[h];
       piece.loop = l->loop;
-      FillResult part = fill_loop(soup, index, piece, options, 0);
+      FillResult part = fill_loop(soup, index, piece, options, 0, planned[h] ? &plans[h] : nullptr);
       if (!l->note.empty()) part.choice = l->note + "; " + part.choice;
       if (first) {
         r = std::move(part);
@@ -408,7 +487,7 @@ std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& 
       r.choice += " | " + part.choice;
       if (!part.reason.empty()) r.reason += (r.reason.empty() ? "" : " | ") + part.reason;
     }
-    seconds[h] = seconds_since(t0);
+    seconds[h] += seconds_since(t0);
   }
   for (const Loop& l : loops)
     for (std::size_t k = 1; k < l.sources.size(); ++k) {

@@ -25,15 +25,26 @@ inline std::uint64_t edge_key(int a, int b) { return undirected_edge_key(a, b); 
 int fans_at(int v, const std::vector<std::array<int, 3>>& faces, DisjointSets& fans);
 
 /// Adjacency of a soup, kept up to date as patches are appended (so later holes see earlier
-/// patches). Built once per fill_holes call: O(#F).
+/// patches). Built once per fill_holes call: a vertex → faces table, O(#F) with no sort (it is
+/// built for every call, and a call often fills one small hole).
 class MeshIndex {
  public:
+  /// Keeps a reference to `soup`, which must outlive the index (patches are appended to it).
   explicit MeshIndex(const TriangleSoup& soup);
   /// Indexes the faces soup.faces[first..] (just appended).
   void add_faces(const TriangleSoup& soup, std::size_t first);
 
   /// Faces using vertex v.
   std::vector<int> faces_of(int v) const;
+  /// visit(f) for every face f using vertex v (no allocation).
+  template <class Visit>
+  void for_each_face_of(int v, Visit&& visit) const {
+    if (v >= 0 && static_cast<std::size_t>(v) + 1 < vf_offset_.size())
+      for (int i = vf_offset_[v]; i < vf_offset_[v + 1]; ++i) visit(vf_faces_[static_cast<std::size_t>(i)]);
+    const auto it = added_vertex_faces_.find(v);
+    if (it != added_vertex_faces_.end())
+      for (int f : it->second) visit(f);
+  }
   /// The face holding the directed edge a→b, or -1 (the first one when the soup is non-manifold).
   int face_with(int a, int b) const;
   /// How many faces use the undirected edge {a, b}.
@@ -41,27 +52,24 @@ class MeshIndex {
   bool has_edge(int a, int b) const { return edge_faces(a, b) > 0; }
   /// Vertex neighbours of v through its faces (unsorted, unique).
   std::vector<int> neighbours(const TriangleSoup& soup, int v) const;
-  /// Faces whose bounding box may overlap the box [lo, hi] (a superset: grid cells), sorted and
-  /// unique; appended to `out`. Replaces a scan of every face when validating a patch.
+  /// Faces whose bounding box overlaps the box [lo, hi] (and faces with non-finite corners),
+  /// ascending; appended to `out`. Boxes of every face and of blocks of kBlock consecutive faces
+  /// are built on the first call (O(#F), no sort: it is paid by every call that fills a hole)
+  /// and extended as patches are added; a query skips the blocks whose box misses [lo, hi].
+  /// Meshes list neighbouring faces close together (grids, subdivisions, marching cubes, PLY
+  /// exports), so a query opens few blocks; on a shuffled mesh it degrades to a linear scan.
   void faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, std::vector<int>& out) const;
 
  private:
-  // The input's faces in flat sorted arrays (one sort instead of millions of hash inserts:
-  // this index is built once per call and dominated small-hole timings as hash maps), the
-  // appended patches' faces in small hash maps.
-  std::vector<std::pair<std::uint64_t, int>> directed_;  // (directed_key, face), sorted
-  std::vector<int> vf_offset_, vf_faces_;                // vertex → faces (CSR)
-  std::unordered_map<std::uint64_t, std::vector<int>> added_directed_;
+  void extend_boxes() const;  // boxes for the faces not boxed yet (appended ones included)
+  const TriangleSoup& soup_;
+  std::vector<int> vf_offset_, vf_faces_;                // the input's vertex → faces (CSR)
   std::unordered_map<int, std::vector<int>> added_vertex_faces_;
-  // Uniform grid over face bounding boxes (cell ≈ 2 mean edge lengths): (cell key, face) sorted
-  // for the input, a hash map for appended faces; faces spanning too many cells are listed apart.
-  void grid_insert(const TriangleSoup& soup, int f, bool appended);
-  Eigen::Vector3d grid_origin_ = Eigen::Vector3d::Zero();
-  double cell_ = 1;
-  std::vector<std::pair<std::uint64_t, int>> grid_;
-  std::unordered_map<std::uint64_t, std::vector<int>> added_grid_;
-  std::vector<int> oversize_;
-  std::size_t faces_ = 0;
+  static constexpr std::size_t kBlock = 32;
+  struct Box {
+    Eigen::Vector3f lo, hi;  // rounded outwards; NaN when a corner is not finite
+  };
+  mutable std::vector<Box> face_boxes_, block_boxes_;
 };
 
 /// A patch under construction. Local vertex l < rim.size() is loop position l (soup vertex

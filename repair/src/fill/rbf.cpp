@@ -19,6 +19,7 @@
 #include <tbb/parallel_for.h>
 
 #include "fill/liepa.h"
+#include "fill/rim_surfaces.h"
 #include "s2c/core/clock.h"
 
 namespace s2c::repair::fill {
@@ -76,14 +77,24 @@ bool CubicRbf::fit(const std::vector<Eigen::Vector3d>& centers, const std::vecto
   for (int i = 0; i < n; ++i) c_.col(i) = (centers[i] - shift_) * scale_;
   const Eigen::Map<const Eigen::VectorXd> h(values.data(), n);
 
+  // Φ's lower triangle by columns, each a vectorised pass over coordinate arrays (the n²/2
+  // square roots dominate the build), then mirrored; columns in parallel only where it pays.
   Eigen::MatrixXd phi(n, n);
-  tbb::parallel_for(tbb::blocked_range<int>(0, n, 32), [&](const auto& range) {  // column j, all rows
-    for (int j = range.begin(); j != range.end(); ++j)
-      for (int i = 0; i < n; ++i) {
-        const double r = (c_.col(i) - c_.col(j)).norm();
-        phi(i, j) = r * r * r;
-      }
-  });
+  const Eigen::ArrayXd X = c_.row(0).transpose(), Y = c_.row(1).transpose(), Z = c_.row(2).transpose();
+  const auto column = [&](int j) {
+    const int m = n - j;
+    const Eigen::ArrayXd r =
+        ((X.tail(m) - X[j]).square() + (Y.tail(m) - Y[j]).square() + (Z.tail(m) - Z[j]).square()).sqrt();
+    phi.col(j).tail(m) = (r * r * r).matrix();
+  };
+  if (n < 512) {
+    for (int j = 0; j < n; ++j) column(j);
+  } else {
+    tbb::parallel_for(tbb::blocked_range<int>(0, n, 32), [&](const auto& range) {
+      for (int j = range.begin(); j != range.end(); ++j) column(j);
+    });
+  }
+  phi.triangularView<Eigen::StrictlyUpper>() = phi.transpose();
   Eigen::MatrixXd P(n, 4);
   P.col(0).setOnes();
   P.rightCols(3) = c_.transpose();
@@ -283,103 +294,161 @@ Eigen::Vector3d HoleSurface::gradient(const Eigen::Vector3d& x) const {
 
 // ---------------------------------------------------------------------------------------------
 
-bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, const HoleShape& shape,
-              const FillOptions& options, RbfStats& stats, std::string& why) {
-  // 1. Rings around the hole by breadth-first search over mesh edges (ring 0 = the rim).
-  const int rings = std::max({options.rbf_smoothing_rings, options.rbf_constraint_rings, 0});
-  std::unordered_map<int, int> ring;
-  std::vector<int> frontier;
-  for (int g : patch.rim)
-    if (ring.emplace(g, 0).second) frontier.push_back(g);
-  for (int r = 1; r <= rings && !frontier.empty(); ++r) {
-    std::vector<int> next;
-    for (int v : frontier)
-      for (int u : index.neighbours(soup, v))
-        if (ring.emplace(u, r).second) next.push_back(u);
-    frontier.swap(next);
-  }
-  // 2. Laplacian smoothing (eq. 4, uniform weights) of rings 1..5 on a copy; the rim stays
-  //    where it is because the patch must meet it exactly. Taubin's μ step after each λ step
-  //    removes the shrinkage that would otherwise pull the fitted surface off a clean one.
-  std::unordered_map<int, Eigen::Vector3d> pos;
-  for (const auto& [v, r] : ring) pos[v] = soup.vertices[v];
-  const auto at = [&](int v) -> const Eigen::Vector3d& {
-    const auto it = pos.find(v);
-    return it != pos.end() ? it->second : soup.vertices[v];
-  };
-  std::vector<int> movable;
-  for (const auto& [v, r] : ring)
-    if (r >= 1 && r <= options.rbf_smoothing_rings) movable.push_back(v);
-  std::sort(movable.begin(), movable.end());
-  std::unordered_map<int, std::vector<int>> nbrs;
-  for (int v : movable) nbrs[v] = index.neighbours(soup, v);
-  for (int pass = 0; pass < options.rbf_smoothing_passes; ++pass)
-    for (const double step : {0.5, -0.53}) {
-      std::vector<Eigen::Vector3d> next(movable.size());
-      for (std::size_t i = 0; i < movable.size(); ++i) {
-        const auto& list = nbrs[movable[i]];
-        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-        for (int u : list) mean += at(u);
-        next[i] = list.empty() ? at(movable[i]) : Eigen::Vector3d(at(movable[i]) + step * (mean / double(list.size()) - at(movable[i])));
+namespace {
+
+// The implicit surfaces of the smooth pieces around a hole, combined: one piece is its own RBF;
+// pieces meeting at convex creases bound the intersection of their insides (f = max fᵢ), at
+// concave ones the union (f = min fᵢ). The gradient is the active piece's.
+struct PieceSurfaces {
+  std::vector<HoleSurface> surfaces;
+  bool convex = true;
+  bool evaluate(const Eigen::Vector3d& x, double& f, Eigen::Vector3d& g) const {
+    bool any = false;
+    for (const auto& s : surfaces) {
+      const double v = s.value(x);
+      if (!std::isfinite(v)) continue;
+      if (!any || (convex ? v > f : v < f)) {
+        f = v;
+        g = s.gradient(x);
+        any = true;
       }
-      for (std::size_t i = 0; i < movable.size(); ++i) pos[movable[i]] = next[i];
     }
-  // 3. Constraints: the vertices of rings 0..3 (value 0) and their normal offsets (value d).
-  //    Normals are area-weighted from the smoothed positions, oriented like the mesh.
-  std::vector<Eigen::Vector3d> points, normals;
-  std::set<std::array<double, 3>> seen;  // different vertices at one position: one constraint
-  std::vector<int> samples;
-  for (const auto& [v, r] : ring)
-    if (r <= options.rbf_constraint_rings) samples.push_back(v);
-  std::sort(samples.begin(), samples.end());
-  for (int v : samples) {
-    const Eigen::Vector3d p = at(v);
-    if (!seen.insert({p.x(), p.y(), p.z()}).second) continue;
-    Eigen::Vector3d n = Eigen::Vector3d::Zero();
-    for (int f : index.faces_of(v)) {
-      const auto& t = soup.faces[f];
-      n += (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0]));
-    }
-    points.push_back(p);
-    normals.push_back(n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero());
+    return any;
   }
-  // 4. Initial patch: minimum-weight triangulation refined to the target density (the paper's
-  //    barycentric subdivision, done with Liepa's density rule so it works for non-convex
-  //    holes too), faired with a C1 join so that the projection starts near the surface.
-  if (!triangulate(soup, index, patch, why) || !refine(index, patch, options.max_patch_vertices, why) ||
-      !fair(soup, index, patch, true, why))
-    return false;
-  std::vector<Eigen::Vector3d> cover(patch.points.begin() + patch.rim_size(), patch.points.end());
-  // 5. The implicit surface.
+};
+
+// Fits one RBF per piece (on-surface points of value 0 and their normal offsets) and projects the
+// patch's new vertices onto the combined surface (eq. 12) until a step is below `tol`.
+bool fit_and_project(const CreaseSplit& split, const Position& at, const std::vector<Eigen::Vector3d>& cover,
+                     const HoleShape& shape, const FillOptions& options, Patch& patch, RbfStats& stats,
+                     std::string& why) {
   const auto t0 = std::chrono::steady_clock::now();
-  HoleSurface surface;
-  if (!surface.fit(points, normals, options.rbf_offset * shape.edge, cover, options.rbf_local_limit, why)) return false;
+  PieceSurfaces combined;
+  combined.convex = split.convex;
+  stats.constraints = 0;
+  stats.local_patches = 0;
+  for (const SmoothPiece& piece : split.pieces) {
+    std::vector<Eigen::Vector3d> points, normals;
+    std::set<std::array<double, 3>> seen;  // different vertices at one position: one constraint
+    for (std::size_t i = 0; i < piece.vertices.size(); ++i) {
+      const Eigen::Vector3d& p = at(piece.vertices[i]);
+      if (!seen.insert({p.x(), p.y(), p.z()}).second) continue;
+      points.push_back(p);
+      normals.push_back(piece.normals[i]);
+    }
+    HoleSurface surface;
+    if (!surface.fit(points, normals, options.rbf_offset * shape.edge, cover, options.rbf_local_limit, why)) return false;
+    stats.constraints += surface.constraints();
+    stats.local_patches += surface.local_patches();
+    combined.surfaces.push_back(std::move(surface));
+  }
   stats.solve_seconds = seconds_since(t0);
-  stats.constraints = surface.constraints();
-  stats.local_patches = surface.local_patches();
-  // 6. Gradient projection (eq. 12) of each new vertex until a step is below the tolerance.
   const auto t1 = std::chrono::steady_clock::now();
   const double tol = options.projection_tolerance * shape.edge;
-  for (int l = patch.rim_size(); l < patch.size(); ++l) {
-    Eigen::Vector3d x = patch.points[l];
+  std::vector<Eigen::Vector3d> moved(patch.points.begin() + patch.rim_size(), patch.points.end());
+  for (auto& x : moved) {
+    const Eigen::Vector3d start = x;
     bool converged = false;
     for (int it = 0; it < 50 && !converged; ++it) {
-      const double f = surface.value(x);
-      const Eigen::Vector3d g = surface.gradient(x);
+      double f = 0;
+      Eigen::Vector3d g;
+      if (!combined.evaluate(x, f, g)) break;
       const double gg = g.squaredNorm();
       if (!std::isfinite(f) || !(gg > 0) || !std::isfinite(gg)) break;
       const Eigen::Vector3d step = (f / gg) * g;
       x -= step;
       converged = step.norm() < tol;
     }
-    if (!converged || (x - patch.points[l]).norm() > shape.diameter) {
+    if (!converged || (x - start).norm() > shape.diameter) {
       why = "gradient projection did not converge";
       return false;
     }
-    patch.points[l] = x;
   }
+  std::copy(moved.begin(), moved.end(), patch.points.begin() + patch.rim_size());
   stats.project_seconds = seconds_since(t1);
   return true;
+}
+
+}  // namespace
+
+bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, const HoleShape& shape,
+              const FillOptions& options, RbfStats& stats, std::string& why) {
+  // 1. Rings around the hole by breadth-first search over mesh edges (ring 0 = the rim), as far
+  //    as the constraints need; on to the smoothing rings only if the surface is smoothed.
+  std::unordered_map<int, int> ring;
+  std::vector<int> frontier;
+  for (int g : patch.rim)
+    if (ring.emplace(g, 0).second) frontier.push_back(g);
+  int reached = 0;
+  const auto grow_to = [&](int rings) {
+    for (; reached < rings && !frontier.empty(); ++reached) {
+      std::vector<int> next;
+      for (int v : frontier)
+        for (int u : index.neighbours(soup, v))
+          if (ring.emplace(u, reached + 1).second) next.push_back(u);
+      frontier.swap(next);
+    }
+  };
+  grow_to(std::max(options.rbf_constraint_rings, 0));
+  std::vector<int> samples, inner;  // constraint vertices (rings 0..3); those off the rim
+  for (const auto& [v, r] : ring)
+    if (r <= options.rbf_constraint_rings) {
+      samples.push_back(v);
+      if (r >= 1) inner.push_back(v);
+    }
+  std::sort(samples.begin(), samples.end());
+  std::sort(inner.begin(), inner.end());
+  // 2. Laplacian smoothing (eq. 4, uniform weights) of rings 1..5 on a copy, when the surface
+  //    there is noisy (on clean input it would only move correct vertices); the rim stays
+  //    where it is because the patch must meet it exactly. Taubin's μ step after each λ step
+  //    removes the shrinkage that would otherwise pull the fitted surface off a clean one.
+  std::unordered_map<int, Eigen::Vector3d> pos;
+  const Position at{soup.vertices, pos};
+  CreaseSplit split = split_at_creases(soup, index, samples, at, options.rbf_crease_angle, 8);
+  // (Sharp edges everywhere are noise themselves: then no vertex is left out.)
+  const bool few_creases = 2 * split.crease_vertices.size() < inner.size();
+  stats.noise = surface_noise(soup, index, inner, at, few_creases ? split.crease_vertices : std::vector<int>{});
+  stats.smoothed = options.rbf_smoothing_passes > 0 && stats.noise > options.rbf_noise_threshold * shape.edge;
+  if (stats.smoothed) {
+    grow_to(std::max(options.rbf_smoothing_rings, 0));
+    for (const auto& [v, r] : ring) pos[v] = soup.vertices[v];
+    std::vector<int> movable;
+    for (const auto& [v, r] : ring)
+      if (r >= 1 && r <= options.rbf_smoothing_rings) movable.push_back(v);
+    std::sort(movable.begin(), movable.end());
+    std::unordered_map<int, std::vector<int>> nbrs;
+    for (int v : movable) nbrs[v] = index.neighbours(soup, v);
+    for (int pass = 0; pass < options.rbf_smoothing_passes; ++pass)
+      for (const double step : {0.5, -0.53}) {
+        std::vector<Eigen::Vector3d> next(movable.size());
+        for (std::size_t i = 0; i < movable.size(); ++i) {
+          const auto& list = nbrs[movable[i]];
+          Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+          for (int u : list) mean += at(u);
+          next[i] = list.empty() ? at(movable[i]) : Eigen::Vector3d(at(movable[i]) + step * (mean / double(list.size()) - at(movable[i])));
+        }
+        for (std::size_t i = 0; i < movable.size(); ++i) pos[movable[i]] = next[i];
+      }
+  }
+  // 3. Constraints: the vertices of rings 0..3 (value 0) and their normal offsets (value d),
+  //    normals area-weighted from the (smoothed) positions, oriented like the mesh; one set per
+  //    smooth piece when sharp creases cross the rings (rim_surfaces.h).
+  if (stats.smoothed) split = split_at_creases(soup, index, samples, at, options.rbf_crease_angle, 8);
+  stats.pieces = split.pieces.size();
+  // 4. Initial patch: minimum-weight triangulation refined to the target density (the paper's
+  //    barycentric subdivision, done with Liepa's density rule so it works for non-convex
+  //    holes too), faired with a C1 join so that the projection starts near the surface.
+  if (!triangulate(soup, index, patch, why) || !refine(index, patch, options.max_patch_vertices, why) ||
+      !fair(soup, index, patch, true, why))
+    return false;
+  const std::vector<Eigen::Vector3d> cover(patch.points.begin() + patch.rim_size(), patch.points.end());
+  // 5, 6. The implicit surface and the gradient projection; one surface over the creases when
+  //    the pieces' combination does not converge.
+  if (fit_and_project(split, at, cover, shape, options, patch, stats, why)) return true;
+  if (split.pieces.size() < 2) return false;
+  split = one_piece(soup, index, samples, at);
+  stats.pieces = 1;
+  return fit_and_project(split, at, cover, shape, options, patch, stats, why);
 }
 
 }  // namespace s2c::repair::fill

@@ -77,10 +77,13 @@ struct RbfStats {
   std::size_t local_patches = 0; ///< 0: one global RBF
   double solve_seconds = 0;
   double project_seconds = 0;
+  double noise = 0;              ///< surface_noise of the rings around the hole, mm
+  bool smoothed = false;         ///< whether the rings were smoothed before the fit
+  std::size_t pieces = 1;        ///< smooth pieces fitted separately (creases cross the rings)
 };
 
-/// The RBF fill of one hole into `patch` (rim and points set): smoothing of the rim region,
-/// initial patch, fit, gradient projection. \return false with `why` on failure.
+/// The RBF fill of one hole into `patch` (rim and points set): smoothing of the rim region when
+/// it is noisy, split at sharp creases, initial patch, fit, gradient projection. \return false with `why` on failure.
 bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, const HoleShape& shape,
               const FillOptions& options, RbfStats& stats, std::string& why);
 

@@ -29,9 +29,19 @@ struct FillOptions {
   double planar_tolerance = 1e-3;
   /// RBF: passes of Laplacian smoothing (eq. 4, λ = 0.5, each followed by Taubin's μ = -0.53
   /// step so that clean surfaces do not shrink) over the `rbf_smoothing_rings`-ring around the
-  /// hole, on a copy used for the fit only (the mesh itself is not moved); 0 = off.
+  /// hole, on a copy used for the fit only (the mesh itself is not moved); 0 = off. Only where
+  /// the surface there is noisy: its noise (fill/rim_surfaces.h: the median jump of the
+  /// umbrella vector's normal component between neighbours, ≈ σ) above `rbf_noise_threshold` ×
+  /// the edge length. Smoothing clean input only moves correct vertices (on a clean sphere it
+  /// doubled the fill's deviation).
   int rbf_smoothing_passes = 1;
   int rbf_smoothing_rings = 5;
+  double rbf_noise_threshold = 0.02;
+  /// RBF: where edges sharper than this dihedral angle (degrees) cut the rings around the hole
+  /// into smooth pieces that all meet convexly (or all concavely), each piece gets its own RBF
+  /// and the patch is projected onto their intersection (union), which keeps the crease through
+  /// the hole instead of rounding it; 0 = one RBF over everything (the paper).
+  double rbf_crease_angle = 30;
   /// RBF: on-surface constraints are the vertices up to this many rings from the rim.
   int rbf_constraint_rings = 3;
   /// RBF: normal-offset constraint distance d, as a fraction of the edge length.
