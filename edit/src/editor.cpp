@@ -385,9 +385,16 @@ struct Editor::Impl {
         });
         return along;
       };
+      // The refit's normal has no preferred sign: the offsets are measured along the patch's own
+      // normal, so they go back along the refitted one turned the same way (a flipped plane
+      // normal mirrored a scan's noise through the plane: 0.01 mm bumps became 0.01 mm dents,
+      // and the side of the plate scan whose top was raised tilted by 0.06° with them).
+      auto normal_after = [&](const Vector3d& p) {
+        const Vector3d n = features::surface_normal(fit.shape, p);
+        return n.dot(features::surface_normal(s, p)) < 0.0 ? Vector3d(-n) : n;
+      };
       for (int v : inner[q])
-        if (clean || along_surface(v))
-          pos[v] = project_onto(fit.shape, pos[v]) + offset(v) * features::surface_normal(fit.shape, pos[v]);
+        if (clean || along_surface(v)) pos[v] = project_onto(fit.shape, pos[v]) + offset(v) * normal_after(pos[v]);
     }
   }
   // The first face that folded over (its normal turned by more than 90° from where the edit
