@@ -33,10 +33,11 @@ struct FillOptions {
   /// the surface there is noisy: its noise (fill/rim_surfaces.h: the median jump of the
   /// umbrella vector's normal component between neighbours, ≈ σ) above `rbf_noise_threshold` ×
   /// the edge length. Smoothing clean input only moves correct vertices (on a clean sphere it
-  /// doubled the fill's deviation).
+  /// doubled the fill's deviation). Measured: CAD tessellations and the hole-filling benchmark's
+  /// shapes 0–0.27 % of the edge, Poisson meshes of the fixture scans 1.0–1.8 %.
   int rbf_smoothing_passes = 1;
   int rbf_smoothing_rings = 5;
-  double rbf_noise_threshold = 0.02;
+  double rbf_noise_threshold = 0.005;
   /// RBF: where edges sharper than this dihedral angle (degrees) cut the rings around the hole
   /// into smooth pieces that all meet convexly (or all concavely), each piece gets its own RBF
   /// and the patch is projected onto their intersection (union), which keeps the crease through
