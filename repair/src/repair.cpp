@@ -94,6 +94,7 @@ void close_and_fill(TriangleSoup& soup, const RepairOptions& o, nlohmann::json& 
                     {"origin", holes[i].origin == Hole::Origin::nested ? "nested" : "single"},
                     {"diameter_mm", holes[i].diameter},
                     {"method", to_string(f.method)},
+                    {"choice", f.choice},
                     {"filled", f.filled},
                     {"reason", f.reason},
                     {"new_faces", f.new_faces},

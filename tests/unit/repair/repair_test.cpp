@@ -34,6 +34,13 @@ TEST(Repair, SphereWithHolesFlippedAndDuplicateFacesIsRepairedOnTheSurface) {
   EXPECT_GE(r.mesh.faces.size(), n - 4);
   for (const auto& v : r.mesh.vertices) EXPECT_NEAR(v.norm(), 10, 0.6);  // patches stay near the sphere
   EXPECT_TRUE(r.report["defects_after"]["cad_ready"].get<bool>());
+  // Each hole in the report says how it was filled and why that way.
+  const auto& list = r.report["surface"]["holes"].at(0)["list"];
+  ASSERT_GE(list.size(), 2u);
+  for (const auto& h : list) {
+    EXPECT_TRUE(h["filled"].get<bool>());
+    EXPECT_FALSE(h["choice"].get<std::string>().empty()) << h.dump();  // e.g. "3-vertex hole: one triangle"
+  }
 }
 
 TEST(Repair, OverlappingShellsBecomeOneCadReadySolid) {
