@@ -227,35 +227,47 @@ Outcome fill_ours(const Cut& cut, repair::FillMethod m) {
 }
 
 #ifdef S2C_HAVE_CGAL
-Outcome fill_cgal(const Cut& cut) {
+// CGAL's mesh of a soup, and its fills of holes in it one call each: time, new points, success
+// accumulated in `o` (the Surface_mesh construction is not timed).
+struct CgalMesh {
   using K = CGAL::Exact_predicates_inexact_constructions_kernel;
   using SM = CGAL::Surface_mesh<K::Point_3>;
-  Outcome o;
   SM m;
   std::vector<SM::Vertex_index> vs;
-  for (const auto& p : cut.soup.vertices) vs.push_back(m.add_vertex(K::Point_3(p.x(), p.y(), p.z())));
-  for (const auto& f : cut.soup.faces)
-    if (m.add_face(vs[f[0]], vs[f[1]], vs[f[2]]) == SM::null_face()) {
-      o.note = "CGAL could not build the mesh";
-      return o;
+  bool built = true;
+
+  explicit CgalMesh(const TriangleSoup& soup) {
+    for (const auto& p : soup.vertices) vs.push_back(m.add_vertex(K::Point_3(p.x(), p.y(), p.z())));
+    for (const auto& f : soup.faces) built &= m.add_face(vs[f[0]], vs[f[1]], vs[f[2]]) != SM::null_face();
+  }
+  /// Fills the hole whose loop starts loop[0] → loop[1]; false with o.note on failure.
+  bool fill(const std::vector<int>& loop, Outcome& o) {
+    const auto [h, found] = CGAL::halfedge(vs[loop[0]], vs[loop[1]], m);
+    if (!found || !m.is_border(h)) {
+      o.note = "no border halfedge";
+      return false;
     }
-  const auto [h, found] = CGAL::halfedge(vs[cut.hole.loop[0]], vs[cut.hole.loop[1]], m);
-  if (!found || !m.is_border(h)) {
-    o.note = "no border halfedge";
+    std::vector<SM::Face_index> faces;
+    std::vector<SM::Vertex_index> verts;
+    const auto t0 = Clock::now();
+    const auto result = CGAL::Polygon_mesh_processing::triangulate_refine_and_fair_hole(
+        m, h, std::back_inserter(faces), std::back_inserter(verts));
+    o.seconds += seconds_since(t0);
+    for (const auto v : verts) o.new_points.push_back({m.point(v).x(), m.point(v).y(), m.point(v).z()});
+    if (!std::get<0>(result)) o.note = "fairing failed";
+    return std::get<0>(result);
+  }
+};
+
+Outcome fill_cgal(const Cut& cut) {
+  Outcome o;
+  CgalMesh mesh(cut.soup);
+  if (!mesh.built) {
+    o.note = "CGAL could not build the mesh";
     return o;
   }
-  std::vector<SM::Face_index> faces;
-  std::vector<SM::Vertex_index> verts;
-  const auto t0 = Clock::now();
-  const auto result = CGAL::Polygon_mesh_processing::triangulate_refine_and_fair_hole(
-      m, h, std::back_inserter(faces), std::back_inserter(verts));
-  o.seconds = seconds_since(t0);
-  o.ok = std::get<0>(result);
-  o.note = o.ok ? "cgal" : "fairing failed";
-  for (const auto v : verts) {
-    const auto& p = m.point(v);
-    o.new_points.push_back({p.x(), p.y(), p.z()});
-  }
+  o.ok = mesh.fill(cut.hole.loop, o);
+  if (o.ok) o.note = "cgal";
   return o;
 }
 #endif
@@ -287,6 +299,21 @@ struct Tally {
 
 std::string g_only;
 
+// One table row per filler (rbf, liepa, auto, CGAL), with the ratios to CGAL in the same run.
+void print_rows(const char* name, const Tally (&t)[4]) {
+  const char* methods[] = {"rbf", "liepa", "auto", "cgal"};
+  const double cgal_dev = t[3].mean_dev(), cgal_ms = t[3].ms();
+  for (int m = 0; m < 4; ++m) {
+    if (t[m].tried == 0) continue;
+    std::printf("| %-8s | %-5s | %2d/%-2d | %10.5f | %10.5f | %8.2f |", name, methods[m], t[m].ok, t[m].tried,
+                t[m].mean_dev(), t[m].dev_max, t[m].ms());
+    if (t[3].ok && m < 3 && t[m].ok)
+      std::printf(" %6.2f | %6.2f |\n", cgal_dev > 0 ? t[m].mean_dev() / cgal_dev : 0, t[m].ms() / cgal_ms);
+    else
+      std::printf("   —    |   —    |\n");
+  }
+}
+
 void run_shape(const char* name, const TriangleSoup& shape, double hole_size, const Distance* exact, int holes,
                std::mt19937& rng) {
   if (!g_only.empty() && g_only != name) {
@@ -296,7 +323,6 @@ void run_shape(const char* name, const TriangleSoup& shape, double hole_size, co
     while (made < holes && attempts++ < holes * 50) made += cut_hole(shape, rng, hole_size, 2000, cut);
     return;
   }
-  const char* methods[] = {"rbf", "liepa", "auto", "cgal"};
   Tally t[4];
   int made = 0, attempts = 0;
   while (made < holes && attempts++ < holes * 50) {
@@ -311,16 +337,7 @@ void run_shape(const char* name, const TriangleSoup& shape, double hole_size, co
     t[3].add(fill_cgal(cut), d);
 #endif
   }
-  const double cgal_dev = t[3].mean_dev(), cgal_ms = t[3].ms();
-  for (int m = 0; m < 4; ++m) {
-    if (t[m].tried == 0) continue;
-    std::printf("| %-8s | %-5s | %2d/%-2d | %10.5f | %10.5f | %8.2f |", name, methods[m], t[m].ok, t[m].tried,
-                t[m].mean_dev(), t[m].dev_max, t[m].ms());
-    if (t[3].ok && m < 3 && t[m].ok)
-      std::printf(" %6.2f | %6.2f |\n", cgal_dev > 0 ? t[m].mean_dev() / cgal_dev : 0, t[m].ms() / cgal_ms);
-    else
-      std::printf("   —    |   —    |\n");
-  }
+  print_rows(name, t);
 }
 
 // The same kind of holes, `holes` of them in one mesh (vertex-disjoint), filled by one
@@ -355,7 +372,6 @@ void run_shape_together(const char* name, const TriangleSoup& shape, double hole
   std::vector<repair::Hole> list;
   for (const Cut& c : cuts) list.push_back(c.hole);
   const Distance d = exact ? *exact : removed_faces_distance(shape, all_removed);
-  const char* methods[] = {"rbf", "liepa", "auto"};
   Tally t[4];
   // Times are the best of kRepeats runs on both sides (this 2-core machine's timings spread by
   // up to 2× from run to run); deviations are the same in every run.
@@ -379,52 +395,23 @@ void run_shape_together(const char* name, const TriangleSoup& shape, double hole
   }
 #ifdef S2C_HAVE_CGAL
   {
-    using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-    using SM = CGAL::Surface_mesh<K::Point_3>;
     Outcome o;
     o.seconds = 1e300;
     for (int rep = 0; rep < kRepeats; ++rep) {
-      SM m;
-      std::vector<SM::Vertex_index> vs;
-      for (const auto& p : holed.vertices) vs.push_back(m.add_vertex(K::Point_3(p.x(), p.y(), p.z())));
-      bool ok = true;
-      for (const auto& f : holed.faces) ok &= m.add_face(vs[f[0]], vs[f[1]], vs[f[2]]) != SM::null_face();
-      double seconds = 0;
-      o.new_points.clear();
-      for (const Cut& c : cuts) {
-        const auto [h, found] = CGAL::halfedge(vs[c.hole.loop[0]], vs[c.hole.loop[1]], m);
-        if (!found || !m.is_border(h)) {
-          ok = false;
-          continue;
-        }
-        std::vector<SM::Face_index> faces;
-        std::vector<SM::Vertex_index> verts;
-        const auto t0 = Clock::now();
-        const auto result = CGAL::Polygon_mesh_processing::triangulate_refine_and_fair_hole(
-            m, h, std::back_inserter(faces), std::back_inserter(verts));
-        seconds += seconds_since(t0);
-        ok &= std::get<0>(result);
-        for (const auto v : verts) o.new_points.push_back({m.point(v).x(), m.point(v).y(), m.point(v).z()});
-      }
-      o.ok = ok;
-      o.seconds = std::min(o.seconds, seconds);
+      CgalMesh mesh(holed);
+      Outcome run;
+      run.ok = mesh.built;
+      for (const Cut& c : cuts) run.ok &= mesh.fill(c.hole.loop, run);
+      o.ok = run.ok;
+      o.new_points = std::move(run.new_points);
+      o.seconds = std::min(o.seconds, run.seconds);
     }
     t[3].add(o, d);
     t[3].ok = o.ok ? static_cast<int>(cuts.size()) : 0;
     t[3].tried = static_cast<int>(cuts.size());
   }
 #endif
-  const double cgal_dev = t[3].mean_dev(), cgal_s = t[3].seconds;
-  for (int m = 0; m < 4; ++m) {
-    if (t[m].tried == 0) continue;
-    const double ms = t[m].ok ? 1000 * t[m].seconds / t[m].tried : 0;
-    std::printf("| %-8s | %-5s | %2d/%-2d | %10.5f | %10.5f | %8.2f |", name, m < 3 ? methods[m] : "cgal", t[m].ok,
-                t[m].tried, t[m].mean_dev(), t[m].dev_max, ms);
-    if (t[3].ok && m < 3 && t[m].ok)
-      std::printf(" %6.2f | %6.2f |\n", cgal_dev > 0 ? t[m].mean_dev() / cgal_dev : 0, t[m].seconds / cgal_s);
-    else
-      std::printf("   —    |   —    |\n");
-  }
+  print_rows(name, t);
 }
 
 void time_rbf_solve(std::size_t n, std::mt19937& rng) {

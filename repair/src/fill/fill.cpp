@@ -125,7 +125,7 @@ void commit(TriangleSoup& soup, MeshIndex& index, const Patch& p, FillResult& r)
     }
     for (auto& n : acc) soup.normals.push_back(n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : n);
   }
-  index.add_faces(soup, first_face);
+  index.add_faces(first_face);
   r.filled = true;
   r.new_vertices = static_cast<std::size_t>(p.size() - p.rim_size());
   r.new_faces = p.faces.size();

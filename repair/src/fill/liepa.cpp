@@ -355,7 +355,7 @@ bool fair(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, bool t
     for (int g : patch.rim) nbrs.erase(g);  // rows for the new vertices only
   } else {
     for (int g : patch.rim)
-      for (int u : index.neighbours(soup, g)) nbrs[g].push_back(u);
+      for (int u : index.neighbours(g)) nbrs[g].push_back(u);
   }
   const auto position = [&](int g) -> const Eigen::Vector3d& {
     return g >= patch.base ? patch.points[static_cast<std::size_t>(g - patch.base + n)] : soup.vertices[g];

@@ -90,10 +90,10 @@ void MeshIndex::faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
   }
 }
 
-void MeshIndex::add_faces(const TriangleSoup& soup, std::size_t first) {
-  for (std::size_t f = first; f < soup.faces.size(); ++f) {
-    if (!valid_face(soup, f)) continue;
-    for (int c : soup.faces[f]) added_vertex_faces_[c].push_back(static_cast<int>(f));
+void MeshIndex::add_faces(std::size_t first) {
+  for (std::size_t f = first; f < soup_.faces.size(); ++f) {
+    if (!valid_face(soup_, f)) continue;
+    for (int c : soup_.faces[f]) added_vertex_faces_[c].push_back(static_cast<int>(f));
   }
 }
 
@@ -128,10 +128,10 @@ int MeshIndex::edge_faces(int a, int b) const {
   return count;
 }
 
-std::vector<int> MeshIndex::neighbours(const TriangleSoup& soup, int v) const {
+std::vector<int> MeshIndex::neighbours(int v) const {
   std::vector<int> out;
   for_each_face_of(v, [&](int f) {
-    for (int c : soup.faces[static_cast<std::size_t>(f)])
+    for (int c : soup_.faces[static_cast<std::size_t>(f)])
       if (c != v) out.push_back(c);
   });
   std::sort(out.begin(), out.end());

@@ -31,8 +31,8 @@ class MeshIndex {
  public:
   /// Keeps a reference to `soup`, which must outlive the index (patches are appended to it).
   explicit MeshIndex(const TriangleSoup& soup);
-  /// Indexes the faces soup.faces[first..] (just appended).
-  void add_faces(const TriangleSoup& soup, std::size_t first);
+  /// Indexes the faces soup.faces[first..] (just appended to the soup given at construction).
+  void add_faces(std::size_t first);
 
   /// Faces using vertex v.
   std::vector<int> faces_of(int v) const;
@@ -51,7 +51,7 @@ class MeshIndex {
   int edge_faces(int a, int b) const;
   bool has_edge(int a, int b) const { return edge_faces(a, b) > 0; }
   /// Vertex neighbours of v through its faces (unsorted, unique).
-  std::vector<int> neighbours(const TriangleSoup& soup, int v) const;
+  std::vector<int> neighbours(int v) const;
   /// Faces whose bounding box overlaps the box [lo, hi] (and faces with non-finite corners),
   /// ascending; appended to `out`. Boxes of every face and of blocks of kBlock consecutive faces
   /// are built on the first call (O(#F), no sort: it is paid by every call that fills a hole)

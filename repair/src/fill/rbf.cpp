@@ -384,7 +384,7 @@ bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, co
     for (; reached < rings && !frontier.empty(); ++reached) {
       std::vector<int> next;
       for (int v : frontier)
-        for (int u : index.neighbours(soup, v))
+        for (int u : index.neighbours(v))
           if (ring.emplace(u, reached + 1).second) next.push_back(u);
       frontier.swap(next);
     }
@@ -417,7 +417,7 @@ bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, co
       if (r >= 1 && r <= options.rbf_smoothing_rings) movable.push_back(v);
     std::sort(movable.begin(), movable.end());
     std::unordered_map<int, std::vector<int>> nbrs;
-    for (int v : movable) nbrs[v] = index.neighbours(soup, v);
+    for (int v : movable) nbrs[v] = index.neighbours(v);
     for (int pass = 0; pass < options.rbf_smoothing_passes; ++pass)
       for (const double step : {0.5, -0.53}) {
         std::vector<Eigen::Vector3d> next(movable.size());

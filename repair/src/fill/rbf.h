@@ -83,7 +83,8 @@ struct RbfStats {
 };
 
 /// The RBF fill of one hole into `patch` (rim and points set): smoothing of the rim region when
-/// it is noisy, split at sharp creases, initial patch, fit, gradient projection. \return false with `why` on failure.
+/// it is noisy, split at sharp creases, initial patch, fit, gradient projection.
+/// \return false with `why` on failure.
 bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, const HoleShape& shape,
               const FillOptions& options, RbfStats& stats, std::string& why);
 

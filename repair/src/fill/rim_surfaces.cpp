@@ -27,7 +27,7 @@ double surface_noise(const TriangleSoup& soup, const MeshIndex& index, const std
   std::unordered_map<int, std::vector<int>> nbrs;
   for (int v : vertices) {
     if (std::binary_search(skip.begin(), skip.end(), v)) continue;
-    auto& list = nbrs[v] = index.neighbours(soup, v);
+    auto& list = nbrs[v] = index.neighbours(v);
     const Eigen::Vector3d n = area_normal(soup, index.faces_of(v), at);
     if (list.empty() || n.squaredNorm() == 0) continue;
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
@@ -86,8 +86,7 @@ CreaseSplit split_at_creases(const TriangleSoup& soup, const MeshIndex& index, c
   by_edge.reserve(3 * faces.size());
   for (std::size_t i = 0; i < faces.size(); ++i) {
     const auto& t = soup.faces[static_cast<std::size_t>(faces[i])];
-    const Eigen::Vector3d n = (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0]));
-    normal[i] = n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero();
+    normal[i] = unit_normal(at(t[0]), at(t[1]), at(t[2]));
     for (int k = 0; k < 3; ++k) by_edge.emplace_back(edge_key(t[k], t[(k + 1) % 3]), static_cast<int>(i));
   }
   std::sort(by_edge.begin(), by_edge.end());

@@ -696,7 +696,7 @@ TEST(Fill, MeshIndexFindsEveryFaceNearABoxIncludingAppendedOnes) {
     s.faces.push_back({b, b + 1, b + 2});
     s.faces.push_back({b + 3, b + 4, b + 5});
     s.faces.push_back({b + 3, b + 4, b + 6});
-    index.add_faces(s, first);
+    index.add_faces(first);
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> u(-12, 12), w(0, 4);
     for (int q = 0; q < 200; ++q) {

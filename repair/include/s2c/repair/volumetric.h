@@ -4,8 +4,9 @@
 /// vector to its closest surface point; the surface is re-extracted with Marching Cubes (or dual
 /// contouring) whose edge point is the closest point on the cube edge to the segment between the
 /// two closest points (the paper's λ), refined at sharp edges by default (`Interp`), or with
-/// linear interpolation of signed distances (`linear`, the scalar baseline). Whatever the input's defects, the output is closed, manifold and consistently
-/// oriented (where the band reaches across every hole).
+/// linear interpolation of signed distances (`linear`, the scalar baseline). Whatever the input's
+/// defects, the output is closed, manifold and consistently oriented (where the band reaches
+/// across every hole).
 #include <cstddef>
 
 #include "s2c/core/mesh.h"
