@@ -33,8 +33,8 @@ struct FillOptions {
   /// the surface there is noisy: its noise (fill/rim_surfaces.h: the median jump of the
   /// umbrella vector's normal component between neighbours, ≈ σ) above `rbf_noise_threshold` ×
   /// the edge length. Smoothing clean input only moves correct vertices (on a clean sphere it
-  /// doubled the fill's deviation). Measured: CAD tessellations and the hole-filling benchmark's
-  /// shapes 0–0.27 % of the edge, Poisson meshes of the fixture scans 1.0–1.8 %.
+  /// doubled the fill's deviation). Measured: the hole-filling benchmark's shapes (the fandisk
+  /// CAD mesh among them) 0–0.27 % of the edge, Poisson meshes of the fixture scans 1.0–1.8 %.
   int rbf_smoothing_passes = 1;
   int rbf_smoothing_rings = 5;
   double rbf_noise_threshold = 0.005;
