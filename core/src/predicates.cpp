@@ -445,6 +445,10 @@ bool projections_apart(const Tri& t, const Tri& u) {
 
 // Faces (v, a, b) and (v, c, d) sharing vertex v: do they share a point other than v?
 bool share_beyond_vertex(const V3& v, const V3& a, const V3& b, const V3& c, const V3& d) {
+  // One face strictly on one side of the other's plane (except v): it meets that plane only at
+  // v. Two orient3d, nearly always settled by their floating-point filter: the common case of
+  // neighbouring faces on a curved surface, before the projections below.
+  if (orient3d(v, c, d, a) * orient3d(v, c, d, b) > 0 || orient3d(v, a, b, c) * orient3d(v, a, b, d) > 0) return false;
   if (sectors_apart(v, a, b, c, d)) return false;
   const bool flat1 = collinear(v, a, b), flat2 = collinear(v, c, d);
   if (!flat1 && !flat2) {

@@ -140,6 +140,11 @@ struct Plan {
   HoleShape shape;
   FillMethod first = FillMethod::rbf, second = FillMethod::liepa;
   std::vector<Patch> candidates;  ///< the first method's, best first
+  /// check_patch of the candidates against the soup as planned (its first `checked_faces`
+  /// faces), up to the first valid one, so that committing needs to test only the faces
+  /// earlier holes appended since.
+  std::vector<std::string> checked;
+  std::size_t checked_faces = 0;
   std::string why;                ///< why the first method built nothing
   std::string rbf_note;
 };
@@ -227,6 +232,12 @@ Plan plan_hole(const TriangleSoup& soup, const MeshIndex& index, const Hole& hol
   }
   plan.second = plan.first == FillMethod::rbf ? FillMethod::liepa : FillMethod::rbf;
   build(soup, index, loop, shape, options, plan.first, plan.candidates, plan.why, r, plan.rbf_note);
+  // Validated here, in the parallel part, against the soup as it is (read only).
+  plan.checked_faces = soup.faces.size();
+  for (const Patch& c : plan.candidates) {  // up to the first valid one: the one committed
+    plan.checked.push_back(fill::check_patch(soup, index, c));
+    if (plan.checked.back().empty()) break;
+  }
   return plan;
 }
 
@@ -248,9 +259,16 @@ FillResult finish_hole(TriangleSoup& soup, MeshIndex& index, const Hole& hole, c
     std::string why = plan.why, rbf_note = plan.rbf_note;
     if (m != plan.first) build(soup, index, hole.loop, plan.shape, options, m, own, why, r, rbf_note);
     std::vector<Patch>& candidates = m == plan.first ? plan.candidates : own;
-    for (Patch& c : candidates) {
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+      Patch& c = candidates[i];
       c.base = nv;  // planned before earlier holes of the call added their vertices
-      why = fill::check_patch(soup, index, c);
+      if (m == plan.first && i < plan.checked.size()) {
+        // Checked when planned; faces are only appended: the new ones and the topology remain.
+        why = plan.checked[i];
+        if (why.empty()) why = fill::check_patch(soup, index, c, {plan.checked_faces, false});
+      } else {
+        why = fill::check_patch(soup, index, c);
+      }
       if (!why.empty()) continue;
       r.method = m;
       if (m == FillMethod::rbf) r.choice += rbf_note;
@@ -455,6 +473,7 @@ std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& 
     if (by_hole[h].size() == 1 && by_hole[h][0]->note.empty()) simple.push_back(h);
   std::vector<Plan> plans(holes.size());
   std::vector<char> planned(holes.size(), 0);
+  index.prepare_boxes();  // the plans validate their patches concurrently
   if (simple.size() > 1)
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, simple.size(), 1), [&](const auto& range) {
       for (std::size_t i = range.begin(); i != range.end(); ++i) {

@@ -4,6 +4,9 @@
 #include <cstddef>
 #include <limits>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "fill/patch.h"
 
 namespace s2c::repair::fill {
@@ -53,39 +56,63 @@ MeshIndex::MeshIndex(const TriangleSoup& soup) : soup_(soup) {
 void MeshIndex::extend_boxes() const {
   const TriangleSoup& soup = soup_;
   constexpr float nan = std::numeric_limits<float>::quiet_NaN();
-  for (std::size_t f = face_boxes_.size(); f < soup.faces.size(); ++f) {
-    Box box{Eigen::Vector3f::Constant(nan), Eigen::Vector3f::Constant(nan)};
+  const Box none{Eigen::Vector3f::Constant(nan), Eigen::Vector3f::Constant(nan)};
+  const auto face_box = [&](std::size_t f) {
     const auto& t = soup.faces[f];
     // (min/max with a NaN corner drop it silently: test the corners themselves)
-    if (valid_face(soup, f) && soup.vertices[t[0]].allFinite() && soup.vertices[t[1]].allFinite() &&
-        soup.vertices[t[2]].allFinite()) {
-      const FaceBox b = box_of(soup, f);
-      box = {down(b.lo), up(b.hi)};
-    }
-    face_boxes_.push_back(box);
-    // Block boxes: a NaN face box makes its block's box NaN (always opened, see faces_near).
+    if (!valid_face(soup, f) || !soup.vertices[t[0]].allFinite() || !soup.vertices[t[1]].allFinite() ||
+        !soup.vertices[t[2]].allFinite())
+      return none;
+    const FaceBox b = box_of(soup, f);
+    return Box{down(b.lo), up(b.hi)};
+  };
+  // Block boxes: a NaN face box makes its block's box NaN (always opened, see faces_near).
+  const auto merge = [&](Box& block, const Box& box) {
+    if (!box.lo.allFinite() || !block.lo.allFinite()) block = none;
+    else block = {block.lo.cwiseMin(box.lo), block.hi.cwiseMax(box.hi)};
+  };
+  const std::size_t from = face_boxes_.size(), to = soup.faces.size();
+  if (from >= to) return;
+  if (face_boxes_.capacity() < to) {  // room for the faces later fills append
+    face_boxes_.reserve(to + to / 4);
+    block_boxes_.reserve(face_boxes_.capacity() / kBlock + 1);
+  }
+  if (from == 0 && to >= 8 * 1024) {
+    // The first build, O(#F) in every call that fills holes: whole blocks in parallel.
+    face_boxes_.resize(to);
+    block_boxes_.resize((to + kBlock - 1) / kBlock);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, block_boxes_.size(), 64), [&](const auto& range) {
+      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+        const std::size_t end = std::min(to, (k + 1) * kBlock);
+        for (std::size_t f = k * kBlock; f < end; ++f) {
+          face_boxes_[f] = face_box(f);
+          if (f == k * kBlock) block_boxes_[k] = face_boxes_[f];
+          else merge(block_boxes_[k], face_boxes_[f]);
+        }
+      }
+    });
+    return;
+  }
+  for (std::size_t f = from; f < to; ++f) {
+    face_boxes_.push_back(face_box(f));
     const std::size_t k = f / kBlock;
-    if (k == block_boxes_.size()) {
-      block_boxes_.push_back(box);
-    } else {
-      Box& bb = block_boxes_[k];
-      if (!box.lo.allFinite() || !bb.lo.allFinite()) bb = {Eigen::Vector3f::Constant(nan), Eigen::Vector3f::Constant(nan)};
-      else bb = {bb.lo.cwiseMin(box.lo), bb.hi.cwiseMax(box.hi)};
-    }
+    if (k == block_boxes_.size()) block_boxes_.push_back(face_boxes_.back());
+    else merge(block_boxes_[k], face_boxes_.back());
   }
 }
 
-void MeshIndex::faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, std::vector<int>& out) const {
-  extend_boxes();
+void MeshIndex::faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, std::vector<int>& out,
+                           std::size_t first) const {
+  if (face_boxes_.size() < soup_.faces.size()) extend_boxes();
   const Eigen::Vector3f l = down(lo), h = up(hi);
   // "Not apart" rather than "overlapping", so that NaN boxes are always kept.
   const auto near = [&](const Box& b) {
     return !((b.hi.array() < l.array()).any() || (b.lo.array() > h.array()).any());
   };
-  for (std::size_t k = 0; k < block_boxes_.size(); ++k) {
+  for (std::size_t k = first / kBlock; k < block_boxes_.size(); ++k) {
     if (!near(block_boxes_[k])) continue;
     const std::size_t end = std::min(face_boxes_.size(), (k + 1) * kBlock);
-    for (std::size_t f = k * kBlock; f < end; ++f)
+    for (std::size_t f = std::max(k * kBlock, first); f < end; ++f)
       if (near(face_boxes_[f]) && valid_face(soup_, f)) out.push_back(static_cast<int>(f));
   }
 }

@@ -58,7 +58,12 @@ class MeshIndex {
   /// and extended as patches are added; a query skips the blocks whose box misses [lo, hi].
   /// Meshes list neighbouring faces close together (grids, subdivisions, marching cubes, PLY
   /// exports), so a query opens few blocks; on a shuffled mesh it degrades to a linear scan.
-  void faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, std::vector<int>& out) const;
+  /// Only faces from index `first` on are considered (those appended since some point).
+  void faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, std::vector<int>& out,
+                  std::size_t first = 0) const;
+  /// Builds the boxes of every face now: faces_near may then be called from several threads
+  /// at once as long as no faces are added meanwhile.
+  void prepare_boxes() const { extend_boxes(); }
 
  private:
   void extend_boxes() const;  // boxes for the faces not boxed yet (appended ones included)

@@ -1,5 +1,5 @@
 // Patch validation: topology first (cheap, and the geometric test assumes it), then exact
-// intersection tests with a uniform-grid broad phase.
+// intersection tests with a sort-and-sweep broad phase.
 #include "fill/patch_check.h"
 
 #include <algorithm>
@@ -15,6 +15,13 @@ namespace {
 
 // Exactly zero area: the three corners are collinear iff all three axis projections are.
 bool collinear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  // Filter: a projection's determinant far above its rounding error (Shewchuk's bound is
+  // 3.3e-16 relative; 1e-14 here, and products clear of underflow) is nonzero for sure.
+  for (const auto& [x, y] : {std::pair{0, 1}, std::pair{1, 2}, std::pair{2, 0}}) {
+    const double l = (a[x] - c[x]) * (b[y] - c[y]), r = (a[y] - c[y]) * (b[x] - c[x]);
+    const double scale = std::abs(l) + std::abs(r);
+    if (scale > 1e-280 && std::abs(l - r) > 1e-14 * scale) return false;
+  }
   const auto proj = [](const Eigen::Vector3d& p, int x, int y) { return Eigen::Vector2d(p[x], p[y]); };
   for (const auto& [x, y] : {std::pair{0, 1}, std::pair{1, 2}, std::pair{2, 0}})
     if (orient2d(proj(a, x, y), proj(b, x, y), proj(c, x, y)) != 0) return false;
@@ -26,13 +33,15 @@ bool collinear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::
 
 int fans_at(int v, const std::vector<std::array<int, 3>>& faces, DisjointSets& fans) {
   fans = DisjointSets(faces.size());
-  std::unordered_map<int, int> by_other;  // other corner of an edge at v → a face holding it
+  // (other corner of an edge at v, a face holding it), sorted: faces sharing an edge at v meet.
+  std::vector<std::pair<int, int>> by_other;
+  by_other.reserve(2 * faces.size());
   for (int f = 0; f < static_cast<int>(faces.size()); ++f)
-    for (int c : faces[f]) {
-      if (c == v) continue;
-      auto [it, inserted] = by_other.try_emplace(c, f);
-      if (!inserted) fans.unite(f, it->second);
-    }
+    for (int c : faces[f])
+      if (c != v) by_other.emplace_back(c, f);
+  std::sort(by_other.begin(), by_other.end());
+  for (std::size_t i = 1; i < by_other.size(); ++i)
+    if (by_other[i].first == by_other[i - 1].first) fans.unite(by_other[i].second, by_other[i - 1].second);
   int roots = 0;
   for (int f = 0; f < static_cast<int>(faces.size()); ++f) roots += fans.find(f) == f;
   return roots;
@@ -40,35 +49,53 @@ int fans_at(int v, const std::vector<std::array<int, 3>>& faces, DisjointSets& f
 
 namespace {
 
-std::string check_topology(const TriangleSoup& soup, const MeshIndex& index, const Patch& p) {
+// rim_only: the patch was checked before against an earlier state of the soup. Only what
+// touches existing vertices can have changed since (edges and fans at the rim); the new
+// vertices and their edges are the patch's own.
+std::string check_topology(const TriangleSoup& soup, const MeshIndex& index, const Patch& p, bool rim_only) {
   const int n = p.rim_size();
-  // Directed patch edges by soup index.
-  std::unordered_map<std::uint64_t, int> directed, undirected;
+  // Patch edges by soup index, directed and undirected, as sorted key lists (no hashing: a
+  // patch has a few hundred edges).
+  std::vector<std::uint64_t> directed, undirected;
+  directed.reserve(3 * p.faces.size());
+  undirected.reserve(3 * p.faces.size());
   for (const auto& t : p.faces)
     for (int k = 0; k < 3; ++k) {
       const int a = p.global(t[k]), b = p.global(t[(k + 1) % 3]);
-      ++directed[directed_key(a, b)];
-      ++undirected[edge_key(a, b)];
+      directed.push_back(directed_key(a, b));
+      undirected.push_back(edge_key(a, b));
     }
-  for (const auto& [key, count] : directed)
-    if (count > 1) return "patch uses an edge twice in the same direction";
-  std::unordered_set<std::uint64_t> rim_edges;
+  std::sort(directed.begin(), directed.end());
+  if (std::adjacent_find(directed.begin(), directed.end()) != directed.end())
+    return "patch uses an edge twice in the same direction";
+  std::vector<std::uint64_t> rim_edges;
   for (int i = 0; i < n; ++i) {
     const int a = p.rim[i], b = p.rim[(i + 1) % n];
-    if (!directed.count(directed_key(a, b))) return "patch does not close the rim edge " + std::to_string(a) + "-" + std::to_string(b);
-    rim_edges.insert(edge_key(a, b));
+    if (!std::binary_search(directed.begin(), directed.end(), directed_key(a, b)))
+      return "patch does not close the rim edge " + std::to_string(a) + "-" + std::to_string(b);
+    rim_edges.push_back(edge_key(a, b));
   }
-  for (const auto& [key, count] : undirected) {
+  std::sort(rim_edges.begin(), rim_edges.end());
+  std::sort(undirected.begin(), undirected.end());
+  long long distinct_edges = 0;
+  for (std::size_t i = 0; i < undirected.size();) {
+    std::size_t j = i;
+    while (j < undirected.size() && undirected[j] == undirected[i]) ++j;
+    const std::uint64_t key = undirected[i];
+    const long long count = static_cast<long long>(j - i);
+    i = j;
+    ++distinct_edges;
     const int a = int(key >> 32), b = int(key & 0xffffffffu);
+    if (rim_only && (a >= p.base || b >= p.base)) continue;
     const int mesh = index.edge_faces(a, b);
-    if (rim_edges.count(key)) {
+    if (std::binary_search(rim_edges.begin(), rim_edges.end(), key)) {
       if (count != 1 || mesh != 1) return "rim edge would not be manifold after filling";
     } else if (count != 2 || mesh != 0) {
       return "patch edge " + std::to_string(a) + "-" + std::to_string(b) + " would not be manifold";
     }
   }
   // Disc: V - E + F = 1 counting loop positions as corners.
-  const long long V = p.size(), E = static_cast<long long>(undirected.size()), F = static_cast<long long>(p.faces.size());
+  const long long V = p.size(), E = distinct_edges, F = static_cast<long long>(p.faces.size());
   long long positions_extra = 0;  // a repeated rim vertex is one soup vertex but two corners
   {
     std::unordered_set<int> seen;
@@ -80,20 +107,27 @@ std::string check_topology(const TriangleSoup& soup, const MeshIndex& index, con
   // cone of faces touching the rim's fan at one vertex, or a nested loop split into two): it may
   // keep them as long as each patch face there joins a fan of mesh faces (no fan of patch faces
   // only) and no fan is lost or added, i.e. after ≤ before.
-  std::unordered_map<int, std::vector<std::array<int, 3>>> fans;
-  for (const auto& t : p.faces) {
-    const std::array<int, 3> g{p.global(t[0]), p.global(t[1]), p.global(t[2])};
-    for (int c : g) fans[c].push_back(g);
+  std::vector<std::array<int, 3>> global(p.faces.size());
+  std::vector<std::pair<int, int>> incidence;  // (vertex, patch face), sorted: one group per vertex
+  incidence.reserve(3 * p.faces.size());
+  for (std::size_t f = 0; f < p.faces.size(); ++f) {
+    const auto& t = p.faces[f];
+    global[f] = {p.global(t[0]), p.global(t[1]), p.global(t[2])};
+    for (int c : global[f])
+      if (!rim_only || c < p.base) incidence.emplace_back(c, static_cast<int>(f));
   }
+  std::sort(incidence.begin(), incidence.end());
   DisjointSets parent;
-  for (auto& [v, faces] : fans) {
+  std::vector<std::array<int, 3>> faces;
+  for (std::size_t i = 0; i < incidence.size();) {
+    const int v = incidence[i].first;
+    faces.clear();
+    for (; i < incidence.size() && incidence[i].first == v; ++i) faces.push_back(global[static_cast<std::size_t>(incidence[i].second)]);
     const std::size_t patch_faces = faces.size();
-    std::vector<std::array<int, 3>> mesh;
-    if (v < p.base)
-      for (int f : index.faces_of(v)) mesh.push_back(soup.faces[f]);
-    faces.insert(faces.end(), mesh.begin(), mesh.end());
+    if (v < p.base) index.for_each_face_of(v, [&](int f) { faces.push_back(soup.faces[static_cast<std::size_t>(f)]); });
     const int after = fans_at(v, faces, parent);
     if (after == 1) continue;
+    const std::vector<std::array<int, 3>> mesh(faces.begin() + static_cast<std::ptrdiff_t>(patch_faces), faces.end());
     DisjointSets mesh_parent;
     const int before = mesh.empty() ? 0 : fans_at(v, mesh, mesh_parent);
     bool attached = before > 1 && after <= before;
@@ -119,7 +153,7 @@ bool overlap(const Box& a, const Box& b) {
 
 }  // namespace
 
-std::string check_patch(const TriangleSoup& soup, const MeshIndex& index, const Patch& p) {
+std::string check_patch(const TriangleSoup& soup, const MeshIndex& index, const Patch& p, const CheckScope& scope) {
   for (const auto& q : p.points)
     if (!q.allFinite()) return "patch has non-finite coordinates";
   if (p.faces.empty()) return "empty patch";
@@ -131,61 +165,50 @@ std::string check_patch(const TriangleSoup& soup, const MeshIndex& index, const 
     ids[f] = {p.global(t[0]), p.global(t[1]), p.global(t[2])};
     if (ids[f][0] == ids[f][1] || ids[f][1] == ids[f][2] || ids[f][0] == ids[f][2])
       return "patch triangle with a repeated vertex";
-    if (collinear(tri[f][0], tri[f][1], tri[f][2])) return "degenerate patch triangle";
+    if (scope.patch_itself && collinear(tri[f][0], tri[f][1], tri[f][2])) return "degenerate patch triangle";
   }
-  if (auto why = check_topology(soup, index, p); !why.empty()) return why;
+  if (auto why = check_topology(soup, index, p, !scope.patch_itself); !why.empty()) return why;
 
-  // Broad phase: patch faces in a uniform grid of about the patch's mean edge length.
   Box all{tri[0][0], tri[0][0]};
-  double edge_sum = 0;
   for (const auto& t : tri) {
     const Box b = box_of(t);
     all.lo = all.lo.cwiseMin(b.lo);
     all.hi = all.hi.cwiseMax(b.hi);
-    edge_sum += (t[1] - t[0]).norm();
   }
-  const double extent = (all.hi - all.lo).maxCoeff();
-  double cell = std::max(2.0 * edge_sum / static_cast<double>(tri.size()), extent / 512.0);
-  if (!(cell > 0)) cell = 1;
-  const auto cell_of = [&](const Eigen::Vector3d& x) {
-    return Eigen::Vector3i(((x - all.lo) / cell).array().floor().cast<int>().cwiseMax(-1).cwiseMin(1 << 20));
-  };
-  const auto key = [](int x, int y, int z) {
-    return (std::uint64_t(std::uint32_t(x + 2)) << 42) ^ (std::uint64_t(std::uint32_t(y + 2)) << 21) ^ std::uint32_t(z + 2);
-  };
-  std::unordered_map<std::uint64_t, std::vector<int>> grid;
+  std::vector<int> near;
+  index.faces_near(all.lo, all.hi, near, scope.mesh_faces_from);
+  if (!scope.patch_itself && near.empty()) return {};  // nothing new nearby
+  // Broad phase: patch faces sorted by the low end of their boxes along the patch's longest
+  // axis; a query box scans from the first face that can reach it (low end ≥ its low end − the
+  // longest face box) to the last that starts before its high end. No allocation per cell.
+  int axis = 0;
+  (all.hi - all.lo).maxCoeff(&axis);
   std::vector<Box> boxes(tri.size());
+  std::vector<int> order(tri.size());
+  double span = 0;
   for (int f = 0; f < static_cast<int>(tri.size()); ++f) {
     boxes[f] = box_of(tri[f]);
-    const Eigen::Vector3i a = cell_of(boxes[f].lo), b = cell_of(boxes[f].hi);
-    for (int x = a.x(); x <= b.x(); ++x)
-      for (int y = a.y(); y <= b.y(); ++y)
-        for (int z = a.z(); z <= b.z(); ++z) grid[key(x, y, z)].push_back(f);
+    order[f] = f;
+    span = std::max(span, boxes[f].hi[axis] - boxes[f].lo[axis]);
   }
-  std::vector<int> stamp(tri.size(), -1);
-  // Tests `t` (ids `ti`, box `bt`) against the patch faces sharing a cell; `self` ≥ 0 only tests
-  // higher patch faces (each pair once).
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return boxes[a].lo[axis] < boxes[b].lo[axis]; });
+  std::vector<double> low(tri.size());
+  for (std::size_t k = 0; k < order.size(); ++k) low[k] = boxes[order[k]].lo[axis];
+  // Tests `t` (ids `ti`, box `bt`) against the patch faces whose boxes overlap; `self` ≥ 0 only
+  // tests higher patch faces (each pair once).
   const auto against_patch = [&](const std::array<Eigen::Vector3d, 3>& t, const std::array<int, 3>& ti,
-                                 const Box& bt, int self, int tag) {
-    const Eigen::Vector3i a = cell_of(bt.lo), b = cell_of(bt.hi);
-    for (int x = a.x(); x <= b.x(); ++x)
-      for (int y = a.y(); y <= b.y(); ++y)
-        for (int z = a.z(); z <= b.z(); ++z) {
-          const auto it = grid.find(key(x, y, z));
-          if (it == grid.end()) continue;
-          for (int g : it->second) {
-            if (g <= self || stamp[g] == tag) continue;
-            stamp[g] = tag;
-            if (overlap(bt, boxes[g]) && faces_self_intersect(t, ti, tri[g], ids[g])) return g;
-          }
-        }
+                                 const Box& bt, int self) {
+    for (auto k = static_cast<std::size_t>(std::lower_bound(low.begin(), low.end(), bt.lo[axis] - span) - low.begin());
+         k < order.size() && low[k] <= bt.hi[axis]; ++k) {
+      const int g = order[k];
+      if (g <= self) continue;
+      if (overlap(bt, boxes[g]) && faces_self_intersect(t, ti, tri[g], ids[g])) return g;
+    }
     return -1;
   };
-  for (int f = 0; f < static_cast<int>(tri.size()); ++f)
-    if (against_patch(tri[f], ids[f], boxes[f], f, f) >= 0) return "patch intersects itself";
-  int tag = static_cast<int>(tri.size());
-  std::vector<int> near;
-  index.faces_near(all.lo, all.hi, near);
+  if (scope.patch_itself)
+    for (int f = 0; f < static_cast<int>(tri.size()); ++f)
+      if (against_patch(tri[f], ids[f], boxes[f], f) >= 0) return "patch intersects itself";
   for (const int f : near) {
     if (f < 0 || static_cast<std::size_t>(f) >= soup.faces.size()) continue;
     const auto& t = soup.faces[static_cast<std::size_t>(f)];
@@ -194,7 +217,7 @@ std::string check_patch(const TriangleSoup& soup, const MeshIndex& index, const 
     const std::array<Eigen::Vector3d, 3> q{soup.vertices[t[0]], soup.vertices[t[1]], soup.vertices[t[2]]};
     const Box bq = box_of(q);
     if (!overlap(bq, all)) continue;
-    if (against_patch(q, t, bq, -1, tag++) >= 0) return "patch intersects the mesh near the hole (face " + std::to_string(f) + ")";
+    if (against_patch(q, t, bq, -1) >= 0) return "patch intersects the mesh near the hole (face " + std::to_string(f) + ")";
   }
   return {};
 }

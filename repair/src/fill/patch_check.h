@@ -1,5 +1,6 @@
 #pragma once
 // Validity of a patch before it is committed to the soup (see fill.h's contract).
+#include <cstddef>
 #include <string>
 
 #include "fill/patch.h"
@@ -11,6 +12,16 @@ namespace s2c::repair::fill {
 /// fan per touched vertex, Euler characteristic 1), has finite coordinates, no degenerate
 /// triangle, and no face pair intersecting within the patch or with the mesh (exact predicates,
 /// CGAL's semantics). Otherwise the first reason found.
-std::string check_patch(const TriangleSoup& soup, const MeshIndex& index, const Patch& patch);
+///
+/// `scope` narrows the geometric part for a patch already checked against an earlier state of
+/// the soup (faces are only ever appended): the mesh faces from `mesh_faces_from` on, and the
+/// patch against itself only when `patch_itself`; without it, of the topology only what involves
+/// existing vertices (rim edges, chords between rim vertices, fans at the rim).
+struct CheckScope {
+  std::size_t mesh_faces_from = 0;
+  bool patch_itself = true;
+};
+std::string check_patch(const TriangleSoup& soup, const MeshIndex& index, const Patch& patch,
+                        const CheckScope& scope = {});
 
 }  // namespace s2c::repair::fill

@@ -33,13 +33,15 @@ class CubicRbf {
   double value(const Eigen::Vector3d& x) const;
   /// ∇f (eq. 11).
   Eigen::Vector3d gradient(const Eigen::Vector3d& x) const;
-  std::size_t size() const { return static_cast<std::size_t>(c_.cols()); }
+  /// f and ∇f in one pass over the centres (what the projection needs at every step).
+  void evaluate(const Eigen::Vector3d& x, double& f, Eigen::Vector3d& g) const;
+  std::size_t size() const { return static_cast<std::size_t>(cx_.size()); }
 
  private:
   Eigen::Vector3d shift_ = Eigen::Vector3d::Zero();
   double scale_ = 1;                              // normalised = (x - shift) * scale
-  Eigen::Matrix3Xd c_;                            // 3 by #N, normalised centres (contiguous points)
-  Eigen::VectorXd w_;                             // #N weights
+  Eigen::ArrayXd cx_, cy_, cz_;                   // normalised centres, one array per coordinate
+  Eigen::ArrayXd w_;                              // #N weights
   Eigen::Vector4d p_ = Eigen::Vector4d::Zero();   // p0, p1, p2, p3 (normalised coordinates)
 };
 
@@ -58,6 +60,8 @@ class HoleSurface {
   /// NaN outside every local patch.
   double value(const Eigen::Vector3d& x) const;
   Eigen::Vector3d gradient(const Eigen::Vector3d& x) const;
+  /// value and gradient at once; false where the value is not finite.
+  bool evaluate(const Eigen::Vector3d& x, double& f, Eigen::Vector3d& g) const;
   std::size_t constraints() const { return constraints_; }
   std::size_t local_patches() const { return locals_.size(); }
 
