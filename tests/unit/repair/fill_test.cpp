@@ -186,6 +186,18 @@ void expect_valid_sheet(const TriangleSoup& s) {
   EXPECT_EQ(c.components, 1u);
 }
 
+// Fills the one hole of a copy of `holed` with `o`, expects it filled and CAD-ready; the new
+// vertices' deviation from the surface whose signed distance is `dist`.
+Deviation fill_and_measure(const TriangleSoup& holed, const FillOptions& o,
+                           const std::function<double(const Eigen::Vector3d&)>& dist, FillResult& r) {
+  TriangleSoup s = holed;
+  const std::size_t before = s.vertices.size();
+  r = fill_holes(s, one_hole(s), o)[0];
+  EXPECT_TRUE(r.filled) << r.reason;
+  expect_cad_ready(s);
+  return deviation(s, before, dist);
+}
+
 TEST(Fill, MethodNames) {
   EXPECT_STREQ(to_string(FillMethod::automatic), "auto");
   EXPECT_STREQ(to_string(FillMethod::rbf), "rbf");
@@ -337,16 +349,12 @@ TEST(Fill, RbfKeepsTheCreaseOfAHoleAcrossACylinderEdge) {
     const double dr = std::hypot(p.x(), p.y()) - R, dz = std::max(-p.z(), p.z() - H);
     return dr <= 0 && dz <= 0 ? std::max(dr, dz) : std::hypot(std::max(dr, 0.0), std::max(dz, 0.0));
   };
+  const TriangleSoup holed = cut_faces(full, cut);
   const auto fill = [&](double crease_angle, FillResult& r) {
-    TriangleSoup s = cut_faces(full, cut);
-    const std::size_t before = s.vertices.size();
     FillOptions o;
     o.method = FillMethod::rbf;
     o.rbf_crease_angle = crease_angle;
-    r = fill_holes(s, one_hole(s), o)[0];
-    EXPECT_TRUE(r.filled) << r.reason;
-    expect_cad_ready(s);
-    return deviation(s, before, closed_cylinder);
+    return fill_and_measure(holed, o, closed_cylinder, r);
   };
   FillResult split, one;
   const Deviation d = fill(30, split);
@@ -389,15 +397,10 @@ TEST(Fill, RbfCleanRingsCarryOffsetsOnEveryOtherRing) {
   });
   const auto sphere = [&](const Eigen::Vector3d& p) { return p.norm() - R; };
   const auto run = [&](double threshold, FillResult& r) {
-    TriangleSoup s = holed;
-    const std::size_t before = s.vertices.size();
     FillOptions o;
     o.method = FillMethod::rbf;
     o.rbf_noise_threshold = threshold;
-    r = fill_holes(s, one_hole(s), o)[0];
-    EXPECT_TRUE(r.filled) << r.reason;
-    expect_cad_ready(s);
-    return deviation(s, before, sphere);
+    return fill_and_measure(holed, o, sphere, r);
   };
   FillResult clean, forced;
   const Deviation d_clean = run(0.005, clean), d_forced = run(0, forced);
