@@ -6,12 +6,11 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <mutex>
 #include <numeric>
 #include <set>
-#include <mutex>
 #include <unordered_map>
 
-#include <Eigen/Cholesky>
 #include <Eigen/Householder>
 #include <Eigen/LU>
 #include <Eigen/QR>

@@ -16,7 +16,7 @@ namespace s2c::repair::fill {
 enum class RbfSolver {
   /// Null-space method: with P = Q [R; 0] (Householder QR of the N×4 polynomial block),
   /// w = Z y for Z = the last N-4 columns of Q, and Zᵀ Φ Z y = Zᵀ h. r³ is conditionally
-  /// positive definite of order 2, so Zᵀ Φ Z is SPD: Cholesky (LLT), N³/3 flops.
+  /// positive definite of order 2, so Zᵀ Φ Z is SPD: Cholesky (LAPACK dpotrf), N³/3 flops.
   nullspace_llt,
   /// The paper's (N+4)² saddle-point system (eq. 9) by LU with partial pivoting, 2N³/3 flops.
   /// (Not LDLT: the system is indefinite and Eigen's LDLT fails on it without saying so.)
