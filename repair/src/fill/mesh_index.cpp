@@ -78,16 +78,30 @@ void MeshIndex::extend_boxes() const {
     block_boxes_.reserve(face_boxes_.capacity() / kBlock + 1);
   }
   if (from == 0 && to >= 8 * 1024) {
-    // The first build, O(#F) in every call that fills holes: whole blocks in parallel.
+    // The first build, O(#F) in every call that fills holes. Each vertex is rounded outwards to
+    // float once (down/up are monotone, so the min of the rounded corners is the rounded min),
+    // then whole blocks of faces in parallel.
+    const std::size_t nv = soup.vertices.size();
+    std::vector<Box> corner(nv);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096), [&](const auto& range) {
+      for (std::size_t v = range.begin(); v != range.end(); ++v)
+        corner[v] = soup.vertices[v].allFinite() ? Box{down(soup.vertices[v]), up(soup.vertices[v])} : none;
+    });
     face_boxes_.resize(to);
     block_boxes_.resize((to + kBlock - 1) / kBlock);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, block_boxes_.size(), 64), [&](const auto& range) {
       for (std::size_t k = range.begin(); k != range.end(); ++k) {
         const std::size_t end = std::min(to, (k + 1) * kBlock);
         for (std::size_t f = k * kBlock; f < end; ++f) {
-          face_boxes_[f] = face_box(f);
-          if (f == k * kBlock) block_boxes_[k] = face_boxes_[f];
-          else merge(block_boxes_[k], face_boxes_[f]);
+          Box box = none;
+          if (valid_face(soup, f)) {
+            const Box &a = corner[soup.faces[f][0]], &b = corner[soup.faces[f][1]], &c = corner[soup.faces[f][2]];
+            if (a.lo.allFinite() && b.lo.allFinite() && c.lo.allFinite())
+              box = {a.lo.cwiseMin(b.lo).cwiseMin(c.lo), a.hi.cwiseMax(b.hi).cwiseMax(c.hi)};
+          }
+          face_boxes_[f] = box;
+          if (f == k * kBlock) block_boxes_[k] = box;
+          else merge(block_boxes_[k], box);
         }
       }
     });
