@@ -18,15 +18,6 @@ bool valid_face(const TriangleSoup& soup, std::size_t f) {
   return std::min({t[0], t[1], t[2]}) >= 0 && std::max({t[0], t[1], t[2]}) < nv;  // bad index: ignored
 }
 
-struct FaceBox {
-  Eigen::Vector3d lo, hi;
-};
-FaceBox box_of(const TriangleSoup& soup, std::size_t f) {
-  const auto& t = soup.faces[f];
-  const Eigen::Vector3d &a = soup.vertices[t[0]], &b = soup.vertices[t[1]], &c = soup.vertices[t[2]];
-  return {a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c)};
-}
-
 // float boxes that contain the double ones: the conversion rounds to nearest (half an ulp, 2⁻²⁴
 // relative), so widening by 2⁻²² relative plus the smallest normal float is always enough.
 Eigen::Vector3f down(const Eigen::Vector3d& x) {
@@ -57,14 +48,19 @@ void MeshIndex::extend_boxes() const {
   const TriangleSoup& soup = soup_;
   constexpr float nan = std::numeric_limits<float>::quiet_NaN();
   const Box none{Eigen::Vector3f::Constant(nan), Eigen::Vector3f::Constant(nan)};
-  const auto face_box = [&](std::size_t f) {
+  const auto corner_box = [&](std::size_t v) {
+    const Eigen::Vector3d& p = soup.vertices[v];
+    return p.allFinite() ? Box{down(p), up(p)} : none;
+  };
+  // A face's box from its corners' rounded boxes (down/up are monotone: the min of the rounded
+  // corners is the rounded min); NaN when a corner is not finite (min/max would drop it silently).
+  const auto face_box = [&](std::size_t f, const auto& corner) {
+    if (!valid_face(soup, f)) return none;
     const auto& t = soup.faces[f];
-    // (min/max with a NaN corner drop it silently: test the corners themselves)
-    if (!valid_face(soup, f) || !soup.vertices[t[0]].allFinite() || !soup.vertices[t[1]].allFinite() ||
-        !soup.vertices[t[2]].allFinite())
-      return none;
-    const FaceBox b = box_of(soup, f);
-    return Box{down(b.lo), up(b.hi)};
+    const Box a = corner(static_cast<std::size_t>(t[0])), b = corner(static_cast<std::size_t>(t[1])),
+              c = corner(static_cast<std::size_t>(t[2]));
+    if (!a.lo.allFinite() || !b.lo.allFinite() || !c.lo.allFinite()) return none;
+    return Box{a.lo.cwiseMin(b.lo).cwiseMin(c.lo), a.hi.cwiseMax(b.hi).cwiseMax(c.hi)};
   };
   // Block boxes: a NaN face box makes its block's box NaN (always opened, see faces_near).
   const auto merge = [&](Box& block, const Box& box) {
@@ -77,38 +73,28 @@ void MeshIndex::extend_boxes() const {
     face_boxes_.reserve(to + to / 4);
     block_boxes_.reserve(face_boxes_.capacity() / kBlock + 1);
   }
-  if (from == 0 && to >= 8 * 1024) {
-    // The first build, O(#F) in every call that fills holes. Each vertex is rounded outwards to
-    // float once (down/up are monotone, so the min of the rounded corners is the rounded min),
-    // then whole blocks of faces in parallel.
+  if (from == 0) {
+    // The first build, O(#F) in every call that fills holes: each vertex rounded once, then
+    // whole blocks of faces, both in parallel on large meshes (a small one is a single task).
     const std::size_t nv = soup.vertices.size();
-    std::vector<Box> corner(nv);
+    std::vector<Box> corners(nv);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096), [&](const auto& range) {
-      for (std::size_t v = range.begin(); v != range.end(); ++v)
-        corner[v] = soup.vertices[v].allFinite() ? Box{down(soup.vertices[v]), up(soup.vertices[v])} : none;
+      for (std::size_t v = range.begin(); v != range.end(); ++v) corners[v] = corner_box(v);
     });
+    const auto cached = [&](std::size_t v) -> const Box& { return corners[v]; };
     face_boxes_.resize(to);
     block_boxes_.resize((to + kBlock - 1) / kBlock);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, block_boxes_.size(), 64), [&](const auto& range) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, block_boxes_.size(), 256), [&](const auto& range) {
       for (std::size_t k = range.begin(); k != range.end(); ++k) {
         const std::size_t end = std::min(to, (k + 1) * kBlock);
-        for (std::size_t f = k * kBlock; f < end; ++f) {
-          Box box = none;
-          if (valid_face(soup, f)) {
-            const Box &a = corner[soup.faces[f][0]], &b = corner[soup.faces[f][1]], &c = corner[soup.faces[f][2]];
-            if (a.lo.allFinite() && b.lo.allFinite() && c.lo.allFinite())
-              box = {a.lo.cwiseMin(b.lo).cwiseMin(c.lo), a.hi.cwiseMax(b.hi).cwiseMax(c.hi)};
-          }
-          face_boxes_[f] = box;
-          if (f == k * kBlock) block_boxes_[k] = box;
-          else merge(block_boxes_[k], box);
-        }
+        block_boxes_[k] = face_boxes_[k * kBlock] = face_box(k * kBlock, cached);
+        for (std::size_t f = k * kBlock + 1; f < end; ++f) merge(block_boxes_[k], face_boxes_[f] = face_box(f, cached));
       }
     });
     return;
   }
-  for (std::size_t f = from; f < to; ++f) {
-    face_boxes_.push_back(face_box(f));
+  for (std::size_t f = from; f < to; ++f) {  // faces appended by fills: a few, corners rounded each time
+    face_boxes_.push_back(face_box(f, corner_box));
     const std::size_t k = f / kBlock;
     if (k == block_boxes_.size()) block_boxes_.push_back(face_boxes_.back());
     else merge(block_boxes_[k], face_boxes_.back());

@@ -55,14 +55,15 @@ namespace {
 std::string check_topology(const TriangleSoup& soup, const MeshIndex& index, const Patch& p, bool rim_only) {
   const int n = p.rim_size();
   // Patch edges by soup index, directed and undirected, as sorted key lists (no hashing: a
-  // patch has a few hundred edges).
+  // patch has a few hundred edges). The directed ones and the disc test below are the patch's
+  // own properties: not repeated in a rim_only re-check.
   std::vector<std::uint64_t> directed, undirected;
-  directed.reserve(3 * p.faces.size());
   undirected.reserve(3 * p.faces.size());
+  if (!rim_only) directed.reserve(3 * p.faces.size());
   for (const auto& t : p.faces)
     for (int k = 0; k < 3; ++k) {
       const int a = p.global(t[k]), b = p.global(t[(k + 1) % 3]);
-      directed.push_back(directed_key(a, b));
+      if (!rim_only) directed.push_back(directed_key(a, b));
       undirected.push_back(edge_key(a, b));
     }
   std::sort(directed.begin(), directed.end());
@@ -71,7 +72,7 @@ std::string check_topology(const TriangleSoup& soup, const MeshIndex& index, con
   std::vector<std::uint64_t> rim_edges;
   for (int i = 0; i < n; ++i) {
     const int a = p.rim[i], b = p.rim[(i + 1) % n];
-    if (!std::binary_search(directed.begin(), directed.end(), directed_key(a, b)))
+    if (!rim_only && !std::binary_search(directed.begin(), directed.end(), directed_key(a, b)))
       return "patch does not close the rim edge " + std::to_string(a) + "-" + std::to_string(b);
     rim_edges.push_back(edge_key(a, b));
   }
@@ -94,14 +95,13 @@ std::string check_topology(const TriangleSoup& soup, const MeshIndex& index, con
       return "patch edge " + std::to_string(a) + "-" + std::to_string(b) + " would not be manifold";
     }
   }
-  // Disc: V - E + F = 1 counting loop positions as corners.
-  const long long V = p.size(), E = distinct_edges, F = static_cast<long long>(p.faces.size());
-  long long positions_extra = 0;  // a repeated rim vertex is one soup vertex but two corners
-  {
+  if (!rim_only) {  // Disc: V - E + F = 1 counting loop positions as corners.
+    const long long V = p.size(), E = distinct_edges, F = static_cast<long long>(p.faces.size());
+    long long positions_extra = 0;  // a repeated rim vertex is one soup vertex but two corners
     std::unordered_set<int> seen;
     for (int g : p.rim) positions_extra += !seen.insert(g).second;
+    if (V - E + F != 1 && V - positions_extra - E + F != 1) return "patch is not a disc";
   }
-  if (V - E + F != 1 && V - positions_extra - E + F != 1) return "patch is not a disc";
   // Fans (edge-connected faces) around every touched vertex. A vertex must end with one fan,
   // except a rim vertex that already had several (a pinch that no patch can undo, e.g. a closed
   // cone of faces touching the rim's fan at one vertex, or a nested loop split into two): it may
@@ -169,11 +169,12 @@ std::string check_patch(const TriangleSoup& soup, const MeshIndex& index, const 
   }
   if (auto why = check_topology(soup, index, p, !scope.patch_itself); !why.empty()) return why;
 
+  std::vector<Box> boxes(tri.size());
   Box all{tri[0][0], tri[0][0]};
-  for (const auto& t : tri) {
-    const Box b = box_of(t);
-    all.lo = all.lo.cwiseMin(b.lo);
-    all.hi = all.hi.cwiseMax(b.hi);
+  for (std::size_t f = 0; f < tri.size(); ++f) {
+    boxes[f] = box_of(tri[f]);
+    all.lo = all.lo.cwiseMin(boxes[f].lo);
+    all.hi = all.hi.cwiseMax(boxes[f].hi);
   }
   std::vector<int> near;
   index.faces_near(all.lo, all.hi, near, scope.mesh_faces_from);
@@ -183,11 +184,9 @@ std::string check_patch(const TriangleSoup& soup, const MeshIndex& index, const 
   // longest face box) to the last that starts before its high end. No allocation per cell.
   int axis = 0;
   (all.hi - all.lo).maxCoeff(&axis);
-  std::vector<Box> boxes(tri.size());
   std::vector<int> order(tri.size());
   double span = 0;
   for (int f = 0; f < static_cast<int>(tri.size()); ++f) {
-    boxes[f] = box_of(tri[f]);
     order[f] = f;
     span = std::max(span, boxes[f].hi[axis] - boxes[f].lo[axis]);
   }

@@ -160,6 +160,26 @@ bool CubicRbf::fit(const std::vector<Eigen::Vector3d>& centers, const std::vecto
   return w_.allFinite() && p_.allFinite();
 }
 
+namespace {
+
+// value and gradient alone, from a surface's evaluate (which computes both in one pass).
+template <class Surface>
+double value_of(const Surface& s, const Eigen::Vector3d& x) {
+  double f;
+  Eigen::Vector3d g;
+  s.evaluate(x, f, g);
+  return f;
+}
+template <class Surface>
+Eigen::Vector3d gradient_of(const Surface& s, const Eigen::Vector3d& x) {
+  double f;
+  Eigen::Vector3d g;
+  s.evaluate(x, f, g);
+  return g;
+}
+
+}  // namespace
+
 void CubicRbf::evaluate(const Eigen::Vector3d& x, double& f, Eigen::Vector3d& g) const {
   const Eigen::Vector3d y = (x - shift_) * scale_;
   // Blocks of kLanes centres with fixed-size arrays: vectorised square roots, no allocation,
@@ -191,19 +211,8 @@ void CubicRbf::evaluate(const Eigen::Vector3d& x, double& f, Eigen::Vector3d& g)
   g = scale_ * (p_.tail<3>() + 3.0 * Eigen::Vector3d(tx, ty, tz));  // chain rule through the normalisation
 }
 
-double CubicRbf::value(const Eigen::Vector3d& x) const {
-  double f;
-  Eigen::Vector3d g;
-  evaluate(x, f, g);
-  return f;
-}
-
-Eigen::Vector3d CubicRbf::gradient(const Eigen::Vector3d& x) const {
-  double f;
-  Eigen::Vector3d g;
-  evaluate(x, f, g);
-  return g;
-}
+double CubicRbf::value(const Eigen::Vector3d& x) const { return value_of(*this, x); }
+Eigen::Vector3d CubicRbf::gradient(const Eigen::Vector3d& x) const { return gradient_of(*this, x); }
 
 // ---------------------------------------------------------------------------------------------
 
@@ -304,22 +313,13 @@ bool HoleSurface::fit(const std::vector<Eigen::Vector3d>& points, const std::vec
   return true;
 }
 
-double HoleSurface::value(const Eigen::Vector3d& x) const {
-  if (locals_.empty()) return global_.value(x);
-  double sum = 0, weight = 0;
-  for (const auto& l : locals_) {
-    const double w = wendland((x - l.center).norm() / l.radius);
-    if (w > 0) {
-      sum += w * l.rbf.value(x);
-      weight += w;
-    }
+bool HoleSurface::evaluate(const Eigen::Vector3d& x, double& f, Eigen::Vector3d& g) const {
+  if (locals_.empty()) {
+    global_.evaluate(x, f, g);
+    return std::isfinite(f);
   }
-  return weight > 0 ? sum / weight : std::numeric_limits<double>::quiet_NaN();
-}
-
-Eigen::Vector3d HoleSurface::gradient(const Eigen::Vector3d& x) const {
-  if (locals_.empty()) return global_.gradient(x);
-  // f = Σ wᵢ fᵢ / Σ wᵢ  ⇒  ∇f = (Σ (∇wᵢ fᵢ + wᵢ ∇fᵢ) - f Σ ∇wᵢ) / Σ wᵢ.
+  // f = Σ wᵢ fᵢ / Σ wᵢ  ⇒  ∇f = (Σ (∇wᵢ fᵢ + wᵢ ∇fᵢ) - f Σ ∇wᵢ) / Σ wᵢ; one pass over each
+  // local RBF gives its fᵢ and ∇fᵢ.
   double sw = 0, swf = 0;
   Eigen::Vector3d sgw = Eigen::Vector3d::Zero(), sgwf = Eigen::Vector3d::Zero();
   for (const auto& l : locals_) {
@@ -328,25 +328,26 @@ Eigen::Vector3d HoleSurface::gradient(const Eigen::Vector3d& x) const {
     const double w = wendland(r);
     if (w <= 0) continue;
     const Eigen::Vector3d gw = dist > 0 ? Eigen::Vector3d(wendland_derivative(r) / (l.radius * dist) * d) : Eigen::Vector3d::Zero();
-    const double fi = l.rbf.value(x);
+    double fi;
+    Eigen::Vector3d gi;
+    l.rbf.evaluate(x, fi, gi);
     sw += w;
     swf += w * fi;
     sgw += gw;
-    sgwf += gw * fi + w * l.rbf.gradient(x);
+    sgwf += gw * fi + w * gi;
   }
-  if (!(sw > 0)) return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
-  return (sgwf - (swf / sw) * sgw) / sw;
-}
-
-bool HoleSurface::evaluate(const Eigen::Vector3d& x, double& f, Eigen::Vector3d& g) const {
-  if (locals_.empty()) {
-    global_.evaluate(x, f, g);
-  } else {
-    f = value(x);
-    if (std::isfinite(f)) g = gradient(x);
+  if (!(sw > 0)) {
+    f = std::numeric_limits<double>::quiet_NaN();
+    g = Eigen::Vector3d::Constant(f);
+    return false;
   }
+  f = swf / sw;
+  g = (sgwf - f * sgw) / sw;
   return std::isfinite(f);
 }
+
+double HoleSurface::value(const Eigen::Vector3d& x) const { return value_of(*this, x); }
+Eigen::Vector3d HoleSurface::gradient(const Eigen::Vector3d& x) const { return gradient_of(*this, x); }
 
 // ---------------------------------------------------------------------------------------------
 
