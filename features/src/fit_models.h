@@ -30,7 +30,7 @@ struct SphereModel {
     const double r2 = r + d[3];
     for (int i = 0; i < s->size(); ++i) out[i] = s->sw[i] * ((s->p[i] - c2).norm() - r2);
   }
-  void jacobian(Eigen::Matrix<double, Eigen::Dynamic, kParams>& J) const {
+  void jacobian(Jacobian<kParams>& J) const {
     for (int i = 0; i < s->size(); ++i) {
       const Vector3d v = s->p[i] - c;
       const double len = v.norm();
@@ -83,7 +83,7 @@ struct AxisModel {
   /// At delta = 0 the tilts move a along u and v (they are perpendicular to it), the shifts move p
   /// along them; with w = v − h a (length rho, perpendicular to a): ∂h/∂tilt_u = u·v,
   /// ∂rho/∂tilt_u = −h (w·u)/rho, ∂rho/∂shift_u = −(w·u)/rho, and the same for v.
-  void jacobian(Eigen::Matrix<double, Eigen::Dynamic, K>& J) const {
+  void jacobian(Jacobian<K>& J) const {
     const double ct = std::cos(theta), st = std::sin(theta);
     const Vector3d u = uv.col(0), t = uv.col(1);
     for (int i = 0; i < s->size(); ++i) {

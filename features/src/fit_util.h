@@ -77,13 +77,18 @@ void finish(Fit& f, const Samples& s);
 /// True when every number of the shape is finite.
 bool finite(const Shape& s);
 
-/// True when Model has `void jacobian(Eigen::Matrix<double, Dynamic, kParams>& J) const`: the
-/// analytic Jacobian of its residuals at delta = 0.
+/// The Jacobian of a model's residuals: one row per residual, rows contiguous (the solver reads
+/// it row by row).
+template <int K>
+using Jacobian = Eigen::Matrix<double, Eigen::Dynamic, K, Eigen::RowMajor>;
+
+/// True when Model has `void jacobian(Jacobian<kParams>& J) const`: the analytic Jacobian of its
+/// residuals at delta = 0.
 template <class Model, class = void>
 struct has_jacobian : std::false_type {};
 template <class Model>
 struct has_jacobian<Model, std::void_t<decltype(std::declval<const Model&>().jacobian(
-                               std::declval<Eigen::Matrix<double, Eigen::Dynamic, Model::kParams>&>()))>>
+                               std::declval<Jacobian<Model::kParams>&>()))>>
     : std::true_type {};
 
 /// Minimises Σ r_i² with Levenberg–Marquardt (the model's analytic Jacobian when it has one, a
@@ -102,7 +107,7 @@ double levenberg_marquardt(Model& model, int max_iterations = kMaxIterations) {
   using Mat = Eigen::Matrix<double, k, k>;
   const int m = model.residual_count();
   Eigen::VectorXd r(m), r_try(m);
-  Eigen::Matrix<double, Eigen::Dynamic, k> J(m, k);
+  Jacobian<k> J(m, k);
   model.residuals(Vec::Zero(), r);
   double cost = r.squaredNorm();
   if (!std::isfinite(cost)) return cost;
@@ -120,14 +125,16 @@ double levenberg_marquardt(Model& model, int max_iterations = kMaxIterations) {
         J.col(j) = (r_try - r) / h;
       }
     }
-    // Normal equations accumulated row by row (k ≤ 6 columns, fixed size).
+    // Normal equations accumulated row by row (k ≤ 6 columns, fixed size), lower triangle only.
     Mat A = Mat::Zero();
     Vec g = Vec::Zero();
     for (int i = 0; i < m; ++i) {
       const Vec row = J.row(i).transpose();
-      A.noalias() += row * row.transpose();
+      for (int c = 0; c < k; ++c)
+        for (int q = c; q < k; ++q) A(q, c) += row[q] * row[c];
       g += row * r[i];
     }
+    A.template triangularView<Eigen::StrictlyUpper>() = A.transpose();
     const double floor = 1e-12 * std::max(A.trace() / k, 1e-300);
     bool accepted = false, converged = false;
     while (lambda < 1e12) {

@@ -143,20 +143,26 @@ std::vector<Eigen::Vector3d> filter_normals(const MeshArrays& m, int iterations,
 }
 
 Samples region_samples(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, const std::vector<int>& faces) {
-  std::unordered_map<int, int> slot;
-  slot.reserve(faces.size() * 2);
+  // Slot of each vertex in the samples, in a per-thread table as long as the mesh (a hash map
+  // cost a fifth of the analysis on million-face regions); only the entries set here are reset.
+  thread_local std::vector<int> slot;
+  if (slot.size() < static_cast<std::size_t>(m.vertices())) slot.assign(m.vertices(), -1);
   Samples s;
+  s.points.reserve(faces.size() / 2 + 3);
   for (int f : faces)
     for (int v : m.tri[f]) {
-      auto [it, fresh] = slot.emplace(v, static_cast<int>(s.points.size()));
-      if (fresh) {
+      int& k = slot[v];
+      if (k < 0) {
+        k = static_cast<int>(s.points.size());
         s.points.push_back(m.pos[v]);
         s.normals.push_back(Eigen::Vector3d::Zero());
         s.weights.push_back(0.0);
       }
-      s.normals[it->second] += m.farea[f] * normals[f];
-      s.weights[it->second] += m.farea[f] / 3.0;
+      s.normals[k] += m.farea[f] * normals[f];
+      s.weights[k] += m.farea[f] / 3.0;
     }
+  for (int f : faces)
+    for (int v : m.tri[f]) slot[v] = -1;
   for (auto& n : s.normals) {
     const double len = n.norm();
     if (len > 0) n /= len;
@@ -194,12 +200,37 @@ bool narrow_zone(const Samples& s, const Shape& cone, double r) {
   return 2 * M_PI - gap >= kBandTurnRad;
 }
 
-}  // namespace
+bool acceptable(const Fit& f, const SegmentParams& p) {
+  return f.ok && f.rms <= p.tolerance && f.normal_rms_deg <= p.normal_tol_deg;
+}
 
-Fit choose_shape(const Samples& s, const SegmentParams& p) {
-  auto acceptable = [&](const Fit& f) {
-    return f.ok && f.rms <= p.tolerance && f.normal_rms_deg <= p.normal_tol_deg;
-  };
+/// A curved fit that may be chosen: acceptable, radius below 20 diagonals (else it is a plane),
+/// a cone neither nearly a cylinder nor nearly a plane.
+bool usable(const Fit& c, const SegmentParams& p) {
+  if (!acceptable(c, p)) return false;
+  if (c.shape.type != ShapeType::cone && !(c.shape.radius < 20.0 * p.diagonal)) return false;
+  return c.shape.type != ShapeType::cone || (c.shape.half_angle_deg >= 2.0 && c.shape.half_angle_deg <= 88.0);
+}
+
+Fit fit_of_type(ShapeType type, const Samples& s) {
+  switch (type) {
+    case ShapeType::plane: return fit_plane(s);
+    case ShapeType::sphere: return fit_sphere(s);
+    case ShapeType::cylinder: return fit_cylinder(s);
+    case ShapeType::cone: return fit_cone(s);
+    default: return Fit{};
+  }
+}
+
+/// Can choose_shape(s, p) come out as `type`? Only if that type's own fit is acceptable (plane) or
+/// usable (curved); one fit instead of four tells most failed merges apart. `fit` receives it.
+bool may_choose(ShapeType type, const Samples& s, const SegmentParams& p, Fit& fit) {
+  fit = fit_of_type(type, s);
+  return type == ShapeType::plane ? acceptable(fit, p) : usable(fit, p);
+}
+
+/// choose_shape, reusing `known` (a fit of the same samples, or null) for its type.
+Fit choose_shape_with(const Samples& s, const SegmentParams& p, const Fit* known) {
   // Distances alone cannot tell shapes apart on CAD tessellations whose vertices lie on two rims
   // (a sphere, a cone and often a cylinder pass exactly through two circles), nor a plane from a
   // strip of a noisy cylinder: the normals can. Score distance and normal residuals against their
@@ -208,24 +239,19 @@ Fit choose_shape(const Samples& s, const SegmentParams& p) {
     const double d = f.rms / p.tolerance, n = f.normal_rms_deg / p.normal_tol_deg;
     return d * d + n * n;
   };
-  const double huge = 20.0 * p.diagonal;
-  const Fit plane = fit_plane(s);
+  auto fit = [&](ShapeType type) { return known && known->shape.type == type ? *known : fit_of_type(type, s); };
+  const Fit plane = fit(ShapeType::plane);
   Fit freeform;
   freeform.shape.type = ShapeType::freeform;
   freeform.rms = plane.ok ? plane.rms : 0.0;
-  const Fit* chosen = acceptable(plane) ? &plane : nullptr;
+  const Fit* chosen = acceptable(plane, p) ? &plane : nullptr;
   if (chosen && score(plane) < 1e-6) return plane;  // exactly flat: nothing can do better
   // The three fits are independent and each costs milliseconds (the cone most): run them at once.
   Fit candidates[3];
-  tbb::parallel_invoke([&] { candidates[0] = fit_sphere(s); }, [&] { candidates[1] = fit_cylinder(s); },
-                       [&] { candidates[2] = fit_cone(s); });
-  auto usable = [&](const Fit& c) {
-    if (!acceptable(c)) return false;
-    if (c.shape.type != ShapeType::cone && !(c.shape.radius < huge)) return false;
-    return c.shape.type != ShapeType::cone || (c.shape.half_angle_deg >= 2.0 && c.shape.half_angle_deg <= 88.0);
-  };
+  tbb::parallel_invoke([&] { candidates[0] = fit(ShapeType::sphere); },
+                       [&] { candidates[1] = fit(ShapeType::cylinder); }, [&] { candidates[2] = fit(ShapeType::cone); });
   for (const Fit& c : candidates) {
-    if (!usable(c)) continue;
+    if (!usable(c, p)) continue;
     // Against a plane a curved shape must halve the score; among the curved ones (a narrow noisy
     // cone band is nearly a sphere zone) a clear 20 % decides.
     const double margin = chosen == &plane ? 0.5 : 0.8;
@@ -238,11 +264,15 @@ Fit choose_shape(const Samples& s, const SegmentParams& p) {
   // samples. (Not on clean tessellations: there each ring of a faceted sphere is exactly a cone
   // band.)
   const Fit& cone = candidates[2];
-  if (p.noisy && chosen == &candidates[0] && usable(cone) && cone.rms <= kChamferPreference * chosen->rms &&
+  if (p.noisy && chosen == &candidates[0] && usable(cone, p) && cone.rms <= kChamferPreference * chosen->rms &&
       narrow_zone(s, cone.shape, chosen->shape.radius))
     chosen = &cone;
   return chosen ? *chosen : freeform;
 }
+
+}  // namespace
+
+Fit choose_shape(const Samples& s, const SegmentParams& p) { return choose_shape_with(s, p, nullptr); }
 
 namespace {
 
@@ -253,8 +283,14 @@ namespace {
 std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals,
                                  const std::vector<VertexTensor>& tensors, const std::vector<int>& faces,
                                  const SegmentParams& p) {
-  std::unordered_map<int, char> remaining;
-  for (int f : faces) remaining[f] = 1;
+  // Per-face state over the whole mesh (regions are split in parallel, each with its own arrays;
+  // hash maps of the region's faces cost more than the fits on million-face regions).
+  enum : unsigned char { kRemaining = 1, kTried = 2 };
+  std::vector<unsigned char> state(m.faces(), 0);
+  for (int f : faces) state[f] = kRemaining;
+  auto remaining = [&](int f) { return (state[f] & kRemaining) != 0; };
+  std::vector<int> stamp(m.faces(), 0);  // faces visited by the current search: stamp == epoch
+  int epoch = 0;
   const double cos_tol = std::cos(p.normal_tol_deg * M_PI / 180.0);
   auto fits = [&](const Shape& shape, int f) {
     for (int v : m.tri[f])
@@ -269,35 +305,34 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
     }
   };
   // Seeds: interior faces (all vertices face-type) first, larger first.
-  std::vector<int> order(faces);
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-    auto interior = [&](int f) {
-      for (int v : m.tri[f])
-        if (tensors[v].cls != VertexClass::face) return false;
-      return true;
-    };
-    const bool ia = interior(a), ib = interior(b);
-    if (ia != ib) return ia;
-    return m.farea[a] > m.farea[b];
-  });
+  std::vector<std::pair<double, int>> keyed;  // (−area, face), interior faces first
+  std::vector<std::pair<double, int>> rim;
+  for (int f : faces) {
+    bool interior = true;
+    for (int v : m.tri[f]) interior &= tensors[v].cls == VertexClass::face;
+    (interior ? keyed : rim).emplace_back(-m.farea[f], f);
+  }
+  auto by_area = [](const auto& a, const auto& b) { return a.first < b.first; };
+  std::stable_sort(keyed.begin(), keyed.end(), by_area);
+  std::stable_sort(rim.begin(), rim.end(), by_area);
+  keyed.insert(keyed.end(), rim.begin(), rim.end());
   std::vector<Region> out;
   std::vector<int> leftovers;
   // Faces near a seed no shape fitted are not tried as seeds again (on a freeform surface every
   // face would cost two fits otherwise), but other regions may still grow over them.
-  std::unordered_map<int, char> tried;
-  for (int seed : order) {
-    if (!remaining.count(seed) || !remaining[seed] || tried.count(seed)) continue;
+  for (const auto& [unused, seed] : keyed) {
+    if (state[seed] != kRemaining) continue;
     // The seed's neighbourhood: rings of faces inside the region until it holds kSeedFaces faces,
     // so that a finely refined faceted cylinder is seen as a cylinder, not as one flat facet; if
     // no shape fits that (the neighbourhood crossed a tangent edge), two rings.
     auto neighbourhood = [&](int rings, std::size_t enough) {
       std::vector<int> faces_near = {seed};
-      std::unordered_map<int, char> seen = {{seed, 1}};
+      stamp[seed] = ++epoch;
       for (int ring = 0; ring < rings && faces_near.size() < enough; ++ring) {
         const std::size_t n = faces_near.size();
         for (std::size_t i = 0; i < n; ++i)
           neighbours(faces_near[i], [&](int g) {
-            if (remaining.count(g) && remaining[g] && !seen.count(g)) seen[g] = 1, faces_near.push_back(g);
+            if (remaining(g) && stamp[g] != epoch) stamp[g] = epoch, faces_near.push_back(g);
           });
       }
       return faces_near;
@@ -307,16 +342,16 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
     if (fit.shape.type == ShapeType::freeform && current.size() > 20)
       fit = choose_shape(region_samples(m, normals, neighbourhood(2, std::numeric_limits<std::size_t>::max())), p);
     if (fit.shape.type == ShapeType::freeform) {
-      for (int f : current) tried[f] = 1;
+      for (int f : current) state[f] |= kTried;
       continue;
     }
     // Grow over faces the shape explains; refit whenever the region has grown by half.
     current = {seed};
-    std::unordered_map<int, char> in = {{seed, 1}};
+    stamp[seed] = ++epoch;
     std::size_t fitted_size = 1;
     for (std::size_t i = 0; i < current.size(); ++i) {
       neighbours(current[i], [&](int g) {
-        if (remaining.count(g) && remaining[g] && !in.count(g) && fits(fit.shape, g)) in[g] = 1, current.push_back(g);
+        if (remaining(g) && stamp[g] != epoch && fits(fit.shape, g)) stamp[g] = epoch, current.push_back(g);
       });
       if (current.size() > fitted_size * 3 / 2 + 8) {
         const Fit refit = choose_shape(region_samples(m, normals, current), p);
@@ -325,7 +360,7 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
         fitted_size = current.size();
       }
     }
-    for (int f : current) remaining[f] = 0;
+    for (int f : current) state[f] &= ~kRemaining;
     if (current.size() < 3) {
       leftovers.insert(leftovers.end(), current.begin(), current.end());
       continue;
@@ -336,7 +371,7 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
     out.push_back(std::move(r));
   }
   for (int f : faces)
-    if (remaining[f]) leftovers.push_back(f);
+    if (remaining(f)) leftovers.push_back(f);
   if (!leftovers.empty()) {
     Region r;
     r.faces = std::move(leftovers);
@@ -526,8 +561,11 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
       if (refused.count(key)) continue;
       std::vector<int> faces = A.faces;
       faces.insert(faces.end(), B.faces.begin(), B.faces.end());
-      const Fit f = choose_shape(region_samples(m, normals, faces), p);
-      if (f.shape.type != A.fit.shape.type) {
+      const Samples samples = region_samples(m, normals, faces);
+      Fit own;
+      const bool may = may_choose(A.fit.shape.type, samples, p, own);
+      const Fit f = may ? choose_shape_with(samples, p, &own) : Fit{};
+      if (!may || f.shape.type != A.fit.shape.type) {
         refused.insert(key);
         continue;
       }

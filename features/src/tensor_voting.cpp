@@ -34,10 +34,31 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
     std::vector<int> mark;
     std::vector<int> queue;
   };
+  std::vector<double> reach(nf);
+  tbb::parallel_for(tbb::blocked_range<int>(0, nf, 4096), [&](const tbb::blocked_range<int>& range) {
+    for (int f = range.begin(); f < range.end(); ++f) {
+      double r2 = 0;
+      for (int u : m.tri[f]) r2 = std::max(r2, (m.pos[u] - m.centroid[f]).squaredNorm());
+      reach[f] = std::sqrt(r2);
+    }
+  });
   tbb::enumerable_thread_specific<Scratch> scratch([nf] { return Scratch{std::vector<int>(nf, -1), {}}; });
+  // Vertices in the order the faces first reach them: neighbours are then voted on one after the
+  // other and share the faces in cache (vertex numbering often follows refinement levels).
+  std::vector<int> order;
+  order.reserve(nv);
+  {
+    std::vector<char> seen(nv, 0);
+    for (const auto& tri : m.tri)
+      for (int u : tri)
+        if (!seen[u]) seen[u] = 1, order.push_back(u);
+    for (int u = 0; u < nv; ++u)
+      if (!seen[u]) order.push_back(u);
+  }
   tbb::parallel_for(tbb::blocked_range<int>(0, nv, 256), [&](const tbb::blocked_range<int>& range) {
     Scratch& s = scratch.local();
-    for (int v = range.begin(); v < range.end(); ++v) {
+    for (int i = range.begin(); i < range.end(); ++i) {
+      const int v = order[i];
       const Eigen::Vector3d p = m.pos[v];
       Eigen::Matrix3d T = Eigen::Matrix3d::Zero();
       s.queue.clear();
@@ -49,9 +70,15 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
         const int f = s.queue[q];
         const auto& tri = m.tri[f];
         const bool incident = tri[0] == v || tri[1] == v || tri[2] == v;
-        const double d = incident ? 0.0 : (closest_point_on_triangle(p, m.pos[tri[0]], m.pos[tri[1]], m.pos[tri[2]]) - p).norm();
-        if (d > radius) continue;
-        const double mu = std::min(m.farea[f], disc) / disc * std::exp(-3.0 * d / radius);
+        double d = 0.0;
+        if (!incident) {
+          // The triangle lies in the ball of radius reach[f] about its centroid: most faces of the
+          // search's outer ring are out of reach by that bound alone, without the closest point.
+          if ((m.centroid[f] - p).norm() - reach[f] > radius * (1.0 + 1e-9)) continue;
+          d = (closest_point_on_triangle(p, m.pos[tri[0]], m.pos[tri[1]], m.pos[tri[2]]) - p).norm();
+          if (d > radius) continue;
+        }
+        const double mu = std::min(m.farea[f], disc) / disc * (incident ? 1.0 : std::exp(-3.0 * d / radius));
         const Eigen::Vector3d& n = normals[f];
         T.noalias() += mu * n * n.transpose();
         for (int u : tri)

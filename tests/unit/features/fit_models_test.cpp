@@ -29,7 +29,7 @@ template <class Model>
 void expect_jacobian_matches_differences(const Model& m, double tol) {
   constexpr int k = Model::kParams;
   const int n = m.residual_count();
-  Eigen::Matrix<double, Eigen::Dynamic, k> J(n, k);
+  Jacobian<k> J(n, k);
   m.jacobian(J);
   Eigen::VectorXd plus(n), minus(n);
   const double h = 1e-6;
