@@ -183,6 +183,7 @@ Analysis analyze(const Mesh& mesh, const FeatureOptions& o, nlohmann::json* repo
       for (const auto& p : f.patches) total += p.area;
       co.min_patch_area = kMinConstraintAreaShare * total;
     }
+    if (noisy && co.min_fixed_angle_deg <= 0) co.min_fixed_angle_deg = o.min_crease_deg;
     constraints = detect_constraints(f, co);
   }
   timings["groups"] = seconds_since(t);

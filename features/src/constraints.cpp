@@ -491,7 +491,9 @@ class Detector {
     for (auto [a, b] : adjacent_) {
       if (!shape_[a] || !shape_[b] || !is_surface(type(a)) || !is_surface(type(b))) continue;
       const std::optional<double> angle = surface_angle(a, b);
-      if (!angle || *angle <= o_.angle_tol_deg || *angle >= 90.0 - o_.angle_tol_deg) continue;
+      if (!angle || *angle <= std::max(o_.angle_tol_deg, o_.min_fixed_angle_deg) ||
+          *angle >= 90.0 - o_.angle_tol_deg)
+        continue;
       add(ConstraintKind::fixed_angle, {a, b}, std::round(*angle * 10.0) / 10.0);
       found_.back().measured = *angle;
     }

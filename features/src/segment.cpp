@@ -552,7 +552,12 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
       if (touched[a] || touched[b]) continue;
       Region& A = seg.regions[a];
       Region& B = seg.regions[b];
-      if (A.fit.shape.type != B.fit.shape.type || A.fit.shape.type == ShapeType::freeform) continue;
+      const ShapeType ta = A.fit.shape.type, tb = B.fit.shape.type;
+      auto curved = [](ShapeType t) { return t == ShapeType::sphere || t == ShapeType::cylinder || t == ShapeType::cone; };
+      // On a noisy mesh one narrow band (a chamfer) may come out as a cone and sphere zones side
+      // by side: curved neighbours of different types merge when one of their types fits both.
+      const bool mixed = p.noisy && ta != tb && curved(ta) && curved(tb);
+      if ((ta != tb && !mixed) || ta == ShapeType::freeform) continue;
       // Across a real crease two planes never fit one plane; this guards near-tangent cases.
       if (A.fit.shape.type == ShapeType::plane &&
           std::abs(A.fit.shape.dir.dot(B.fit.shape.dir)) < std::cos(2.0 * M_PI / 180))
@@ -563,9 +568,9 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
       faces.insert(faces.end(), B.faces.begin(), B.faces.end());
       const Samples samples = region_samples(m, normals, faces);
       Fit own;
-      const bool may = may_choose(A.fit.shape.type, samples, p, own);
+      const bool may = may_choose(ta, samples, p, own) || (mixed && may_choose(tb, samples, p, own));
       const Fit f = may ? choose_shape_with(samples, p, &own) : Fit{};
-      if (!may || f.shape.type != A.fit.shape.type) {
+      if (!may || (f.shape.type != ta && (!mixed || f.shape.type != tb))) {
         refused.insert(key);
         continue;
       }

@@ -718,6 +718,32 @@ TEST(ConstraintsTest, FixedAngleSkipsTangentSquareAndVaryingEdges) {
   EXPECT_EQ(count(f, ConstraintKind::equal_angle), 0);
 }
 
+TEST(ConstraintsTest, FixedAngleBelowTheMinimumIsNotStated) {
+  // Neighbours of a plane at 6° (pieces of one noisy surface on a scan) and at 45° (a chamfer).
+  FeatureSet f;
+  for (double deg : {0.0, 6.0, 45.0}) {
+    Patch p;
+    p.id = "P" + std::to_string(f.patches.size());
+    p.shape = make_shape(ShapeType::plane, Vector3d::Zero(),
+                         Eigen::AngleAxisd(deg * kPi / 180, Vector3d::UnitX()) * Vector3d::UnitZ());
+    f.patches.push_back(p);
+    if (deg > 0) f.adjacency.emplace_back("P0", p.id);
+  }
+  FeatureSet all = f;
+  ConstraintOptions o;
+  o.diagonal = 100;
+  detect_constraints(all, o);
+  EXPECT_EQ(count(all, ConstraintKind::fixed_angle), 2);
+  o.min_fixed_angle_deg = 25.0;
+  detect_constraints(f, o);
+  ASSERT_EQ(count(f, ConstraintKind::fixed_angle), 1);
+  for (const Group* g : constraints(f))
+    if (*g->constraint == ConstraintKind::fixed_angle) {
+      EXPECT_EQ(g->members[1], "P2");
+      EXPECT_NEAR(*g->value, 45.0, 1e-9);
+    }
+}
+
 TEST(ConstraintsTest, CollinearAndConnectedLines) {
   FeatureSet f;
   auto seg = [&](Vector3d a, Vector3d b, int va, int vb) {

@@ -21,6 +21,11 @@ struct ConstraintOptions {
   /// (a constriction inside a hole the scanner never saw, leftovers along rounded edges), whose
   /// chance alignments would be stated as constraints. 0: every patch takes part.
   double min_patch_area = 0.0;
+  /// fixed_angle needs the patches to meet at least at this angle (degrees; 0: above the angle
+  /// tolerance). On scan meshes the analysis sets it to the smallest crease angle it detects:
+  /// pieces of one noisy surface that the fits split (a domed end in sphere and cone zones) meet
+  /// at a few degrees along a border that is no crease, and no designed angle is stated there.
+  double min_fixed_angle_deg = 0.0;
 };
 
 /// Detects constraints among `features` (their patches and lines with shapes; `adjacency`
