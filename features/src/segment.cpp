@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <queue>
 #include <set>
 #include <unordered_map>
@@ -142,18 +143,31 @@ std::vector<Eigen::Vector3d> filter_normals(const MeshArrays& m, int iterations,
   return n;
 }
 
-Samples region_samples(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, const std::vector<int>& faces) {
+namespace {
+
+/// Samples of a face set before their normals are normalised, with the vertex of each: the
+/// merges continue the samples of A ∪ B from A's instead of gathering all of them again.
+struct RawSamples {
+  std::vector<int> vertex;
+  Samples s;  ///< normals: area-weighted sums, not yet unit
+};
+
+/// Adds the faces' contributions to `raw`, vertices new to it at the end: over the faces of A and
+/// then those of B this gives bit for bit what one pass over A's and B's faces gives.
+void accumulate(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, const std::vector<int>& faces,
+                RawSamples& raw) {
   // Slot of each vertex in the samples, in a per-thread table as long as the mesh (a hash map
   // cost a fifth of the analysis on million-face regions); only the entries set here are reset.
   thread_local std::vector<int> slot;
   if (slot.size() < static_cast<std::size_t>(m.vertices())) slot.assign(m.vertices(), -1);
-  Samples s;
-  s.points.reserve(faces.size() / 2 + 3);
+  for (std::size_t k = 0; k < raw.vertex.size(); ++k) slot[raw.vertex[k]] = static_cast<int>(k);
+  Samples& s = raw.s;
   for (int f : faces)
     for (int v : m.tri[f]) {
       int& k = slot[v];
       if (k < 0) {
         k = static_cast<int>(s.points.size());
+        raw.vertex.push_back(v);
         s.points.push_back(m.pos[v]);
         s.normals.push_back(Eigen::Vector3d::Zero());
         s.weights.push_back(0.0);
@@ -161,13 +175,26 @@ Samples region_samples(const MeshArrays& m, const std::vector<Eigen::Vector3d>& 
       s.normals[k] += m.farea[f] * normals[f];
       s.weights[k] += m.farea[f] / 3.0;
     }
-  for (int f : faces)
-    for (int v : m.tri[f]) slot[v] = -1;
+  for (int v : raw.vertex) slot[v] = -1;
+}
+
+/// The samples: normals made unit.
+Samples finished(RawSamples raw) {
+  Samples s = std::move(raw.s);
   for (auto& n : s.normals) {
     const double len = n.norm();
     if (len > 0) n /= len;
   }
   return s;
+}
+
+}  // namespace
+
+Samples region_samples(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, const std::vector<int>& faces) {
+  RawSamples raw;
+  raw.s.points.reserve(faces.size() / 2 + 3);
+  accumulate(m, normals, faces, raw);
+  return finished(std::move(raw));
 }
 
 namespace {
@@ -530,6 +557,8 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
   // A pair that failed to merge is not tried again while both regions are unchanged (the key:
   // first face and size of each; merging changes both).
   std::set<std::array<std::size_t, 4>> refused;
+  // Raw samples of the regions that were the first of a pair, kept while they are unchanged.
+  std::vector<std::optional<RawSamples>> raw(seg.regions.size());
   auto key_of = [](const Region& A, const Region& B) {
     return std::array<std::size_t, 4>{static_cast<std::size_t>(A.faces.front()), A.faces.size(),
                                       static_cast<std::size_t>(B.faces.front()), B.faces.size()};
@@ -564,9 +593,13 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
         continue;
       const auto key = key_of(A, B);
       if (refused.count(key)) continue;
-      std::vector<int> faces = A.faces;
-      faces.insert(faces.end(), B.faces.begin(), B.faces.end());
-      const Samples samples = region_samples(m, normals, faces);
+      if (!raw[a]) {
+        raw[a].emplace();
+        accumulate(m, normals, A.faces, *raw[a]);
+      }
+      RawSamples united = *raw[a];
+      accumulate(m, normals, B.faces, united);
+      const Samples samples = finished(united);
       Fit own;
       const bool may = may_choose(ta, samples, p, own) || (mixed && may_choose(tb, samples, p, own));
       const Fit f = may ? choose_shape_with(samples, p, &own) : Fit{};
@@ -574,7 +607,8 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
         refused.insert(key);
         continue;
       }
-      A.faces = std::move(faces);
+      A.faces.insert(A.faces.end(), B.faces.begin(), B.faces.end());
+      raw[a] = std::move(united);
       A.fit = f;
       A.area += B.area;
       for (int g : B.faces) seg.face_region[g] = a;
@@ -583,7 +617,13 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
       ++seg.merges;
       merged = true;
     }
-    if (merged) drop_regions(seg, [](const Region& r) { return r.faces.empty(); });
+    if (merged) {
+      std::vector<std::optional<RawSamples>> kept;
+      for (std::size_t r = 0; r < seg.regions.size(); ++r)
+        if (!seg.regions[r].faces.empty()) kept.push_back(std::move(raw[r]));
+      raw = std::move(kept);
+      drop_regions(seg, [](const Region& r) { return r.faces.empty(); });
+    }
   }
   for (auto& r : seg.regions) std::sort(r.faces.begin(), r.faces.end());
   return seg;
