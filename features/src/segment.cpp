@@ -152,18 +152,20 @@ struct RawSamples {
   Samples s;  ///< normals: area-weighted sums, not yet unit
 };
 
-/// Adds the faces' contributions to `raw`, vertices new to it at the end: over the faces of A and
-/// then those of B this gives bit for bit what one pass over A's and B's faces gives.
+/// Adds the contributions of faces[from..] to `raw`, vertices new to it at the end: over the
+/// faces of A and then those of B this gives bit for bit what one pass over A's and B's faces
+/// gives (the merges; a growing region adds only its new faces).
 void accumulate(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, const std::vector<int>& faces,
-                RawSamples& raw) {
+                RawSamples& raw, std::size_t from = 0) {
   // Slot of each vertex in the samples, in a per-thread table as long as the mesh (a hash map
   // cost a fifth of the analysis on million-face regions); only the entries set here are reset.
   thread_local std::vector<int> slot;
   if (slot.size() < static_cast<std::size_t>(m.vertices())) slot.assign(m.vertices(), -1);
   for (std::size_t k = 0; k < raw.vertex.size(); ++k) slot[raw.vertex[k]] = static_cast<int>(k);
   Samples& s = raw.s;
-  for (int f : faces)
-    for (int v : m.tri[f]) {
+  for (std::size_t i = from; i < faces.size(); ++i)
+    for (int v : m.tri[faces[i]]) {
+      const int f = faces[i];
       int& k = slot[v];
       if (k < 0) {
         k = static_cast<int>(s.points.size());
@@ -376,12 +378,19 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
     current = {seed};
     stamp[seed] = ++epoch;
     std::size_t fitted_size = 1;
+    RawSamples grown;  // samples of current[0 .. gathered), extended at each fit
+    std::size_t gathered = 0;
+    auto current_samples = [&] {
+      accumulate(m, normals, current, grown, gathered);
+      gathered = current.size();
+      return finished(grown);
+    };
     for (std::size_t i = 0; i < current.size(); ++i) {
       neighbours(current[i], [&](int g) {
         if (remaining(g) && stamp[g] != epoch && fits(fit.shape, g)) stamp[g] = epoch, current.push_back(g);
       });
       if (current.size() > fitted_size * 3 / 2 + 8) {
-        const Fit refit = choose_shape(region_samples(m, normals, current), p);
+        const Fit refit = choose_shape(current_samples(), p);
         if (refit.shape.type == ShapeType::freeform) break;
         fit = refit;
         fitted_size = current.size();
@@ -393,8 +402,8 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
       continue;
     }
     Region r;
+    r.fit = choose_shape(current_samples(), p);
     r.faces = std::move(current);
-    r.fit = choose_shape(region_samples(m, normals, r.faces), p);
     out.push_back(std::move(r));
   }
   for (int f : faces)
