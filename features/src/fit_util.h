@@ -129,10 +129,13 @@ double levenberg_marquardt(Model& model, int max_iterations = kMaxIterations) {
     Mat A = Mat::Zero();
     Vec g = Vec::Zero();
     for (int i = 0; i < m; ++i) {
-      const Vec row = J.row(i).transpose();
-      for (int c = 0; c < k; ++c)
+      // Straight from the Jacobian's storage: a copy of the row to the stack was stored in two
+      // halves and read back across them, stalling every row on store forwarding.
+      const double* row = J.data() + static_cast<std::ptrdiff_t>(i) * k;
+      for (int c = 0; c < k; ++c) {
         for (int q = c; q < k; ++q) A(q, c) += row[q] * row[c];
-      g += row * r[i];
+        g[c] += row[c] * r[i];
+      }
     }
     A.template triangularView<Eigen::StrictlyUpper>() = A.transpose();
     const double floor = 1e-12 * std::max(A.trace() / k, 1e-300);
