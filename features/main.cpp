@@ -31,7 +31,8 @@ int main(int argc, char** argv) {
   app.add_option("-o,--output", output, "features.json to write")->required();
   app.add_option("--segments-out", segments, "Also write the mesh with a colour and a segment id per face (.ply)");
   app.add_option("--min-angle", o.min_crease_deg,
-                 "Smallest crease angle to detect, degrees (angle between the face normals across the edge)")
+                 "Smallest crease angle to detect, degrees (angle between the face normals across the edge); on "
+                 "noisy meshes also the smallest angle stated as a fixed_angle constraint")
       ->check(CLI::Range(1.0, 120.0))->capture_default_str();
   app.add_option("--radius", o.radius, "Tensor voting radius, mm (default: 2 median edge lengths, 3 on noisy meshes)")
       ->check(CLI::NonNegativeNumber);
