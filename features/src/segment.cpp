@@ -349,7 +349,8 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
   std::vector<int> leftovers;
   // Faces near a seed no shape fitted are not tried as seeds again (on a freeform surface every
   // face would cost two fits otherwise), but other regions may still grow over them.
-  for (const auto& [unused, seed] : keyed) {
+  for (const auto& keyed_seed : keyed) {
+    const int seed = keyed_seed.second;  // a plain variable: lambdas below capture it
     if (state[seed] != kRemaining) continue;
     // The seed's neighbourhood: rings of faces inside the region until it holds kSeedFaces faces,
     // so that a finely refined faceted cylinder is seen as a cylinder, not as one flat facet; if
