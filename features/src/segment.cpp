@@ -163,9 +163,9 @@ void accumulate(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals
   if (slot.size() < static_cast<std::size_t>(m.vertices())) slot.assign(m.vertices(), -1);
   for (std::size_t k = 0; k < raw.vertex.size(); ++k) slot[raw.vertex[k]] = static_cast<int>(k);
   Samples& s = raw.s;
-  for (std::size_t i = from; i < faces.size(); ++i)
-    for (int v : m.tri[faces[i]]) {
-      const int f = faces[i];
+  for (std::size_t i = from; i < faces.size(); ++i) {
+    const int f = faces[i];
+    for (int v : m.tri[f]) {
       int& k = slot[v];
       if (k < 0) {
         k = static_cast<int>(s.points.size());
@@ -177,6 +177,7 @@ void accumulate(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals
       s.normals[k] += m.farea[f] * normals[f];
       s.weights[k] += m.farea[f] / 3.0;
     }
+  }
   for (int v : raw.vertex) slot[v] = -1;
 }
 
@@ -194,7 +195,6 @@ Samples finished(RawSamples raw) {
 
 Samples region_samples(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, const std::vector<int>& faces) {
   RawSamples raw;
-  raw.s.points.reserve(faces.size() / 2 + 3);
   accumulate(m, normals, faces, raw);
   return finished(std::move(raw));
 }
@@ -598,8 +598,7 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
       const bool mixed = p.noisy && ta != tb && curved(ta) && curved(tb);
       if ((ta != tb && !mixed) || ta == ShapeType::freeform) continue;
       // Across a real crease two planes never fit one plane; this guards near-tangent cases.
-      if (A.fit.shape.type == ShapeType::plane &&
-          std::abs(A.fit.shape.dir.dot(B.fit.shape.dir)) < std::cos(2.0 * M_PI / 180))
+      if (ta == ShapeType::plane && std::abs(A.fit.shape.dir.dot(B.fit.shape.dir)) < std::cos(2.0 * M_PI / 180))
         continue;
       const auto key = key_of(A, B);
       if (refused.count(key)) continue;
