@@ -16,7 +16,8 @@
 #            (fixtures/scans/PART → reconstruct → repair, kept in OUT/scan_PART and reused): time,
 #            the requested value against the value refitted from the truth-labelled vertices
 #            (s2c-bench-edit refit), the largest residual of the truth's constraints on the
-#            refitted primitives before and after, and scan2cad check
+#            refitted primitives before and after and the largest growth of one of them (what the
+#            edit added), and scan2cad check
 # Environment: OUT=DIR (default: a new /tmp directory), VERTICES=50000,1000000, STEPS=20.
 set -uo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -86,6 +87,12 @@ def worst(key):
         x = residual(c, key)
         if x: a, l = max(a, x[0]), max(l, x[1])
     return a, l
+def growth():  # what the edit added: the largest increase of one constraint's residual
+    a = l = 0.0
+    for c in truth["constraints"]:
+        x, y = residual(c, "before"), residual(c, None)
+        if x and y: a, l = max(a, y[0] - x[0]), max(l, y[1] - x[1])
+    return a, l
 # expectation "id:property:value" (e.g. hole_0:radius:3.5)
 eid, prop, want = expect.split(":")
 got = None
@@ -98,9 +105,11 @@ st = rep["statements"]
 prop_steps = sum(len(s.get("propagation", [])) for s in st)
 free = max((s.get("free_vertices", 0) for s in st), default=0)
 broken = rep["counts"]["broken_constraints"]
-print("| %s | %s | %s | %.2f s | %s %s = %s → %.4f (err %.4f mm) | %.3g° / %.3g mm → %.3g° / %.3g mm | %d | %d | %d | %s |" % (
+ga, gl = growth()
+carried = sum(s.get("carried_patches", 0) for s in st)
+print("| %s | %s | %s | %.2f s | %s %s = %s → %.4f (err %.4f mm) | %.3g° / %.3g mm → %.3g° / %.3g mm | %.2g° / %.2g mm | %d | %d | %d | %d | %s |" % (
     part, label, script, float(t1) - float(t0), eid, prop, want, got if got is not None else float("nan"), err,
-    ab, lb, aa, la, prop_steps, free, broken, "yes" if check["cad_ready"] else "NO"))
+    ab, lb, aa, la, ga, gl, prop_steps, carried, free, broken, "yes" if check["cad_ready"] else "NO"))
 PY
 }
 
@@ -108,8 +117,8 @@ if [[ " $sections " == *" scripts "* ]]; then
   echo
   echo "### scripts on the fixture parts: requested vs refitted, truth constraints, CAD-ready"
   echo
-  echo "| part | input | script | time (incl. read, check, write) | requested → refitted | truth constraint residual before → after (worst) | propagation steps | free vertices | broken | CAD-ready |"
-  echo "|---|---|---|---|---|---|---|---|---|---|"
+  echo "| part | input | script | time (incl. read, check, write) | requested → refitted | truth constraint residual before → after (worst) | largest growth of one constraint's residual | propagation steps | carried crumbs | free vertices | broken | CAD-ready |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
   declare -A expect=(
     [plate_widen_holes]="hole_1:radius:3.5"
     [plate_raise_top]="top:z:10"

@@ -320,6 +320,11 @@ class Interpreter {
   }
   void say_edit(const EditReport& r) const {
     for (const auto& p : r.propagation) say("  propagates: " + p);
+    if (!r.carried.empty()) {
+      std::vector<std::string> names;
+      for (FeatureRef f : r.carried) names.push_back(ed_.id(f));
+      say(fmt::format("  carries {} crumb patch(es) lying on the edited surfaces: {}", names.size(), fmt::join(names, ", ")));
+    }
     say(fmt::format("  moves {} vertices on the edited features, solves {} on {} neighbouring patches (ARAP, {} iterations{}), "
                     "largest displacement {:.4g} mm, {:.3g} ms",
                     r.handle_vertices, r.free_vertices, r.free.size(), r.arap_iterations,

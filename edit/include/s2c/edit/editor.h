@@ -69,6 +69,10 @@ struct EditOptions {
   /// Patches smaller than this fraction of the total area (and freeform ones) are crumbs: they pass
   /// the freedom of the 1-ring on to their neighbours.
   double small_patch_fraction = 0.002;
+  /// A crumb touching a modified patch (directly or through other crumbs) whose every vertex lies
+  /// within this fraction of the mesh's bounding-box diagonal of the patch's surface belongs to
+  /// it: it takes the patch's map (a scan's hole wall left in pieces, a rounded rim). ≤ 0: never.
+  double carry_band_fraction = 0.01;
   /// Free vertices lie within influence × half the size of the largest modified feature (at least
   /// 4× the largest displacement) of a moved vertex; the rest of a free patch stays fixed, so an
   /// edit of a hole costs the same in a plane of 1k or of 1M vertices. ≤ 0: whole free patches.
@@ -83,6 +87,7 @@ struct EditReport {
   std::vector<FeatureRef> edited;       ///< the features the call named
   std::vector<FeatureRef> propagated;   ///< features changed by constraint propagation, in order
   std::vector<std::string> propagation; ///< one line per propagation step ("parallel G3: P2 rotated 15°")
+  std::vector<FeatureRef> carried;      ///< crumbs moved with the modified patch they belong to
   std::vector<FeatureRef> free;         ///< patches deformed by ARAP
   int handle_vertices = 0;              ///< vertices placed by shape maps
   int free_vertices = 0;                ///< vertices solved by ARAP
