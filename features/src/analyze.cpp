@@ -115,8 +115,10 @@ Analysis analyze(const Mesh& mesh, const FeatureOptions& o, nlohmann::json* repo
   const bool noisy = out.noise > kCleanNoise * edge;
   // Noise needs a wider vote and smoothed normals; a clean tessellation keeps its exact normals.
   out.radius = o.radius > 0 ? o.radius : (noisy ? 3.0 : 2.0) * edge;
-  std::vector<Eigen::Vector3d> normals =
-      noisy ? filter_normals(m, 8, 0.35) : m.fnormal;
+  // (A reference, not a copy, of the face normals: 80 MB at 3.3 M faces.)
+  std::vector<Eigen::Vector3d> filtered;
+  if (noisy) filtered = filter_normals(m, 8, 0.35);
+  const std::vector<Eigen::Vector3d>& normals = noisy ? filtered : m.fnormal;
   timings["normals"] = seconds_since(t);
 
   t = Clock::now();

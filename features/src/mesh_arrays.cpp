@@ -10,13 +10,15 @@ namespace s2c::features {
 MeshArrays build_arrays(const Mesh& mesh) {
   MeshArrays m;
   const int nv = static_cast<int>(mesh.n_vertices()), nf = static_cast<int>(mesh.n_faces());
+  // Every step but the prefix sums runs over vertices, faces or edges in parallel (OpenMesh is
+  // only read); ids and order are those of the sequential walk.
   m.pos.resize(nv);
-  for (int v = 0; v < nv; ++v) m.pos[v] = to_eigen(mesh.point(Mesh::VertexHandle(v)));
+  tbb::parallel_for(0, nv, [&](int v) { m.pos[v] = to_eigen(mesh.point(Mesh::VertexHandle(v))); });
   m.tri.resize(nf);
-  for (int f = 0; f < nf; ++f) {
+  tbb::parallel_for(0, nf, [&](int f) {
     int k = 0;
     for (auto fv : mesh.fv_range(Mesh::FaceHandle(f))) m.tri[f][k++] = fv.idx();
-  }
+  });
   m.fnormal.resize(nf);
   m.centroid.resize(nf);
   m.farea.resize(nf);
@@ -37,27 +39,38 @@ MeshArrays build_arrays(const Mesh& mesh) {
   for (int f = 0; f < nf; ++f)
     for (int v : m.tri[f]) m.vf[fill[v]++] = f;
 
-  m.edges.reserve(mesh.n_edges());
+  // Edges with at least one face, numbered in OpenMesh's order (isolated edges skipped).
+  const int ne_all = static_cast<int>(mesh.n_edges());
+  std::vector<int> id(ne_all + 1, 0);
+  tbb::parallel_for(0, ne_all, [&](int e) {
+    const Mesh::EdgeHandle eh(e);
+    id[e + 1] = mesh.face_handle(mesh.halfedge_handle(eh, 0)).is_valid() ||
+                mesh.face_handle(mesh.halfedge_handle(eh, 1)).is_valid();
+  });
+  for (int e = 0; e < ne_all; ++e) id[e + 1] += id[e];
+  const int ne = id[ne_all];
+  m.edges.resize(ne);
   m.face_edges.assign(nf, {-1, -1, -1});
-  std::vector<double> lengths;
-  lengths.reserve(mesh.n_edges());
-  for (auto e : mesh.edges()) {
-    const auto h0 = mesh.halfedge_handle(e, 0), h1 = mesh.halfedge_handle(e, 1);
-    int a = mesh.to_vertex_handle(h0).idx(), b = mesh.from_vertex_handle(h0).idx();
+  std::vector<double> lengths(ne);
+  tbb::parallel_for(0, ne_all, [&](int e) {
+    if (id[e + 1] == id[e]) return;  // an isolated edge without faces
+    const Mesh::EdgeHandle eh(e);
+    const auto h0 = mesh.halfedge_handle(eh, 0), h1 = mesh.halfedge_handle(eh, 1);
+    const int a = mesh.to_vertex_handle(h0).idx(), b = mesh.from_vertex_handle(h0).idx();
     int f0 = mesh.face_handle(h0).idx(), f1 = mesh.face_handle(h1).idx();
     if (f0 < 0) std::swap(f0, f1);
-    if (f0 < 0) continue;  // an isolated edge without faces
-    const int id = static_cast<int>(m.edges.size());
-    m.edges.push_back({std::min(a, b), std::max(a, b), f0, f1});
-    lengths.push_back((m.pos[a] - m.pos[b]).norm());
+    const int k = id[e];
+    m.edges[k] = {std::min(a, b), std::max(a, b), f0, f1};
+    lengths[k] = (m.pos[a] - m.pos[b]).norm();
+    // Each edge writes its own slot of its faces' edge triples.
     for (int f : {f0, f1}) {
       if (f < 0) continue;
       for (int i = 0; i < 3; ++i) {
         const int p = m.tri[f][i], q = m.tri[f][(i + 1) % 3];
-        if ((p == a && q == b) || (p == b && q == a)) m.face_edges[f][i] = id;
+        if ((p == a && q == b) || (p == b && q == a)) m.face_edges[f][i] = k;
       }
     }
-  }
+  });
   if (!lengths.empty()) {
     double sum = 0;
     for (double l : lengths) sum += l;

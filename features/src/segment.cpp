@@ -573,6 +573,18 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
     return std::array<std::size_t, 4>{static_cast<std::size_t>(A.faces.front()), A.faces.size(),
                                       static_cast<std::size_t>(B.faces.front()), B.faces.size()};
   };
+  // One pass tries the neighbouring pairs in order; a region merged in the pass is not tried
+  // again in it. The trials run in rounds: a round evaluates, in parallel, every pending trial
+  // whose two regions no earlier pending trial holds, then applies the results in order. Each
+  // trial thus sees its regions as the sequential walk would, and the result is the same.
+  struct Trial {
+    int a, b;
+    bool mixed;
+    bool ok = false;
+    Fit fit;
+    std::optional<RawSamples> united;
+  };
+  auto curved = [](ShapeType t) { return t == ShapeType::sphere || t == ShapeType::cylinder || t == ShapeType::cone; };
   bool merged = true;
   while (merged) {
     merged = false;
@@ -586,13 +598,11 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
     }
     std::sort(pairs.begin(), pairs.end());
     pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-    std::vector<char> touched(seg.regions.size(), 0);
+    std::vector<Trial> trials;
     for (auto [a, b] : pairs) {
-      if (touched[a] || touched[b]) continue;
-      Region& A = seg.regions[a];
-      Region& B = seg.regions[b];
+      const Region& A = seg.regions[a];
+      const Region& B = seg.regions[b];
       const ShapeType ta = A.fit.shape.type, tb = B.fit.shape.type;
-      auto curved = [](ShapeType t) { return t == ShapeType::sphere || t == ShapeType::cylinder || t == ShapeType::cone; };
       // On a noisy mesh one narrow band (a chamfer) may come out as a cone and sphere zones side
       // by side: curved neighbours of different types merge when one of their types fits both.
       const bool mixed = p.noisy && ta != tb && curved(ta) && curved(tb);
@@ -600,31 +610,68 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
       // Across a real crease two planes never fit one plane; this guards near-tangent cases.
       if (ta == ShapeType::plane && std::abs(A.fit.shape.dir.dot(B.fit.shape.dir)) < std::cos(2.0 * M_PI / 180))
         continue;
-      const auto key = key_of(A, B);
-      if (refused.count(key)) continue;
-      if (!raw[a]) {
-        raw[a].emplace();
-        accumulate(m, normals, A.faces, *raw[a]);
-      }
-      RawSamples united = *raw[a];
-      accumulate(m, normals, B.faces, united);
+      if (refused.count(key_of(A, B))) continue;
+      trials.push_back({a, b, mixed, false, {}, std::nullopt});
+    }
+    auto evaluate = [&](Trial& t) {
+      const ShapeType ta = seg.regions[t.a].fit.shape.type, tb = seg.regions[t.b].fit.shape.type;
+      RawSamples united = *raw[t.a];
+      accumulate(m, normals, seg.regions[t.b].faces, united);
       const Samples samples = finished(united);
       Fit own;
-      const bool may = may_choose(ta, samples, p, own) || (mixed && may_choose(tb, samples, p, own));
-      const Fit f = may ? choose_shape_with(samples, p, &own) : Fit{};
-      if (!may || (f.shape.type != ta && (!mixed || f.shape.type != tb))) {
-        refused.insert(key);
-        continue;
+      const bool may = may_choose(ta, samples, p, own) || (t.mixed && may_choose(tb, samples, p, own));
+      if (may) t.fit = choose_shape_with(samples, p, &own);
+      t.ok = may && (t.fit.shape.type == ta || (t.mixed && t.fit.shape.type == tb));
+      if (t.ok) t.united = std::move(united);
+    };
+    std::vector<char> touched(seg.regions.size(), 0), done(trials.size(), 0);
+    std::vector<int> busy(seg.regions.size(), -1);  // round that holds the region
+    std::size_t next = 0;
+    for (int round = 0; next < trials.size(); ++round) {
+      std::vector<int> ready;
+      for (std::size_t k = next; k < trials.size(); ++k) {
+        const Trial& t = trials[k];
+        if (done[k]) continue;
+        if (touched[t.a] || touched[t.b]) {
+          done[k] = 1;
+          continue;
+        }
+        if (busy[t.a] != round && busy[t.b] != round) ready.push_back(static_cast<int>(k));
+        busy[t.a] = busy[t.b] = round;
       }
-      A.faces.insert(A.faces.end(), B.faces.begin(), B.faces.end());
-      raw[a] = std::move(united);
-      A.fit = f;
-      A.area += B.area;
-      for (int g : B.faces) seg.face_region[g] = a;
-      B.faces.clear();
-      touched[a] = touched[b] = 1;
-      ++seg.merges;
-      merged = true;
+      // The first regions' raw samples, kept while they are unchanged (ready trials hold
+      // distinct regions, so each is gathered once).
+      std::vector<char> gather(ready.size(), 0);
+      for (std::size_t i = 0; i < ready.size(); ++i)
+        if (!raw[trials[ready[i]].a]) {
+          raw[trials[ready[i]].a].emplace();
+          gather[i] = 1;
+        }
+      tbb::parallel_for(0, static_cast<int>(ready.size()), [&](int i) {
+        Trial& t = trials[ready[i]];
+        if (gather[i]) accumulate(m, normals, seg.regions[t.a].faces, *raw[t.a]);
+        evaluate(t);
+      });
+      for (int k : ready) {
+        Trial& t = trials[k];
+        done[k] = 1;
+        Region& A = seg.regions[t.a];
+        Region& B = seg.regions[t.b];
+        if (!t.ok) {
+          refused.insert(key_of(A, B));
+          continue;
+        }
+        A.faces.insert(A.faces.end(), B.faces.begin(), B.faces.end());
+        raw[t.a] = std::move(t.united);
+        A.fit = t.fit;
+        A.area += B.area;
+        for (int g : B.faces) seg.face_region[g] = t.a;
+        B.faces.clear();
+        touched[t.a] = touched[t.b] = 1;
+        ++seg.merges;
+        merged = true;
+      }
+      while (next < trials.size() && done[next]) ++next;
     }
     if (merged) {
       std::vector<std::optional<RawSamples>> kept;
