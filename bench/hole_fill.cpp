@@ -298,7 +298,7 @@ struct Tally {
 };
 
 std::string g_only;
-constexpr int kRepeats = 3;  // timings: best of this many runs, ours and CGAL's alike
+int kRepeats = 3;  // timings: best of this many runs, ours and CGAL's alike (--repeats)
 
 // One table row per filler (rbf, liepa, auto, CGAL), with the ratios to CGAL in the same run.
 void print_rows(const char* name, const Tally (&t)[4]) {
@@ -466,8 +466,9 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--no-solve-table")) solve_table = false;
     else if (!std::strcmp(argv[i], "--only") && i + 1 < argc) only = argv[++i];
     else if (!std::strcmp(argv[i], "--protocol") && i + 1 < argc) protocol = argv[++i];
+    else if (!std::strcmp(argv[i], "--repeats") && i + 1 < argc) kRepeats = std::max(1, std::atoi(argv[++i]));
     else {
-      std::fprintf(stderr, "usage: s2c-bench-holefill [--holes N] [--real MESH] [--only sphere|cylinder|torus|real] [--protocol each|together|both] [--rbf-only | --no-solve-table]\n");
+      std::fprintf(stderr, "usage: s2c-bench-holefill [--holes N] [--real MESH] [--only sphere|cylinder|torus|real] [--protocol each|together|both] [--repeats N] [--rbf-only | --no-solve-table]\n");
       return 2;
     }
   }

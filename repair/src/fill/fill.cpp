@@ -14,6 +14,7 @@
 #include <Eigen/Eigenvalues>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include "fill/liepa.h"
 #include "fill/patch.h"
@@ -178,7 +179,20 @@ void build(const TriangleSoup& soup, const MeshIndex& index, const std::vector<i
   }
 }
 
-Plan plan_hole(const TriangleSoup& soup, const MeshIndex& index, const Hole& hole, const FillOptions& options) {
+// check_patch of the plan's candidates against the soup as it is, up to the first valid one.
+void validate(const TriangleSoup& soup, const MeshIndex& index, Plan& plan) {
+  if (plan.done) return;
+  plan.checked.clear();
+  plan.checked_faces = soup.faces.size();
+  for (const Patch& c : plan.candidates) {  // up to the first valid one: the one committed
+    plan.checked.push_back(fill::check_patch(soup, index, c));
+    if (plan.checked.back().empty()) break;
+  }
+}
+
+// `checked`: validate the candidates too (needs the index's boxes; see fill_holes).
+Plan plan_hole(const TriangleSoup& soup, const MeshIndex& index, const Hole& hole, const FillOptions& options,
+               bool checked = true) {
   Plan plan;
   FillResult& r = plan.result;
   const auto& loop = hole.loop;
@@ -232,12 +246,7 @@ Plan plan_hole(const TriangleSoup& soup, const MeshIndex& index, const Hole& hol
   }
   plan.second = plan.first == FillMethod::rbf ? FillMethod::liepa : FillMethod::rbf;
   build(soup, index, loop, shape, options, plan.first, plan.candidates, plan.why, r, plan.rbf_note);
-  // Validated here, in the parallel part, against the soup as it is (read only).
-  plan.checked_faces = soup.faces.size();
-  for (const Patch& c : plan.candidates) {  // up to the first valid one: the one committed
-    plan.checked.push_back(fill::check_patch(soup, index, c));
-    if (plan.checked.back().empty()) break;
-  }
+  if (checked) validate(soup, index, plan);  // against the soup as it is (read only)
   return plan;
 }
 
@@ -473,17 +482,24 @@ std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& 
     if (by_hole[h].size() == 1 && by_hole[h][0]->note.empty()) simple.push_back(h);
   std::vector<Plan> plans(holes.size());
   std::vector<char> planned(holes.size(), 0);
-  index.prepare_boxes();  // the plans validate their patches concurrently
-  if (simple.size() > 1)
+  // The index's boxes (for validation) are built while the plans are made, and the plans are
+  // then validated concurrently (a single hole gains most: the boxes cost O(#F)).
+  const auto over_simple = [&](const auto& work) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, simple.size(), 1), [&](const auto& range) {
       for (std::size_t i = range.begin(); i != range.end(); ++i) {
         const std::size_t h = simple[i];
         const auto t0 = std::chrono::steady_clock::now();
-        plans[h] = plan_hole(soup, index, holes[h], options);
-        planned[h] = 1;
-        seconds[h] = seconds_since(t0);
+        work(h);
+        seconds[h] += seconds_since(t0);
       }
     });
+  };
+  const auto plan_unchecked = [&](std::size_t h) { plans[h] = plan_hole(soup, index, holes[h], options, false); };
+  tbb::parallel_invoke([&] { index.prepare_boxes(); }, [&] { over_simple(plan_unchecked); });
+  over_simple([&](std::size_t h) {
+    validate(soup, index, plans[h]);
+    planned[h] = 1;
+  });
   for (std::size_t h = 0; h < holes.size(); ++h) {
     if (by_hole[h].empty()) continue;  // merged into an earlier hole, reported below
     const auto t0 = std::chrono::steady_clock::now();

@@ -200,8 +200,7 @@ class PatchTopology {
     if (corner_after(f1, a) != b || corner_after(f2, b) != a) return false;
     const int c = corner_after(f1, b), d = corner_after(f2, a);
     const Eigen::Vector3d &A = p_.points[a], &B = p_.points[b], &C = p_.points[c], &D = p_.points[d];
-    const double angle_c = angle(A - C, B - C), angle_d = angle(A - D, B - D);
-    if (!(angle_c + angle_d > M_PI + 1e-9)) return false;
+    if (!opposite_angles_exceed_pi(A - C, B - C, A - D, B - D)) return false;
     const int gc = p_.global(c), gd = p_.global(d);
     if (gc == gd || index_.has_edge(gc, gd) || global_edges_.count(edge_key(gc, gd))) return false;
     const Eigen::Vector3d n1 = (A - C).cross(D - C), n2 = (B - D).cross(C - D);
@@ -242,8 +241,15 @@ class PatchTopology {
   }
 
  private:
-  static double angle(const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
-    return std::atan2(u.cross(v).norm(), u.dot(v));
+  // Whether the angle between u and v plus the one between u2 and v2 exceeds π (by more than
+  // 1e-9): both lie in [0, π], so their sum does exactly when its sine is negative, and
+  // sin(α + β) = sin α cos β + cos α sin β needs no arc tangent (this test runs for every edge
+  // of every refinement pass).
+  static bool opposite_angles_exceed_pi(const Eigen::Vector3d& u, const Eigen::Vector3d& v, const Eigen::Vector3d& u2,
+                                        const Eigen::Vector3d& v2) {
+    const double sin_sum = u.cross(v).norm() * u2.dot(v2) + u.dot(v) * u2.cross(v2).norm();  // × |u||v||u2||v2|
+    const double scale = std::sqrt(u.squaredNorm() * v.squaredNorm() * u2.squaredNorm() * v2.squaredNorm());
+    return sin_sum < -1e-9 * scale;
   }
   int corner_after(int f, int a) const {
     const auto& t = p_.faces[f];

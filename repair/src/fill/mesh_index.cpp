@@ -12,10 +12,11 @@
 namespace s2c::repair::fill {
 namespace {
 
-bool valid_face(const TriangleSoup& soup, std::size_t f) {
-  const auto& t = soup.faces[f];
-  const int nv = static_cast<int>(soup.vertices.size());
-  return std::min({t[0], t[1], t[2]}) >= 0 && std::max({t[0], t[1], t[2]}) < nv;  // bad index: ignored
+inline bool valid_face(const std::array<int, 3>& t, int nv) {  // bad index: ignored
+  return (t[0] | t[1] | t[2]) >= 0 && t[0] < nv && t[1] < nv && t[2] < nv;
+}
+inline bool valid_face(const TriangleSoup& soup, std::size_t f) {
+  return valid_face(soup.faces[f], static_cast<int>(soup.vertices.size()));
 }
 
 // float boxes that contain the double ones: the conversion rounds to nearest (half an ulp, 2⁻²⁴
@@ -27,6 +28,18 @@ Eigen::Vector3f down(const Eigen::Vector3d& x) {
 Eigen::Vector3f up(const Eigen::Vector3d& x) {
   const Eigen::Vector3f f = x.cast<float>();
   return f + (f.cwiseAbs() * 2.4e-7f).array().matrix() + Eigen::Vector3f::Constant(1.2e-38f);
+}
+
+// A face's box in double; `finite` false when a corner is not finite (min/max would drop it).
+struct FaceBox {
+  Eigen::Vector3d lo, hi;
+  bool finite;
+};
+FaceBox face_box(const TriangleSoup& soup, std::size_t f) {
+  const auto& t = soup.faces[f];
+  const Eigen::Vector3d &a = soup.vertices[static_cast<std::size_t>(t[0])], &b = soup.vertices[static_cast<std::size_t>(t[1])],
+                        &c = soup.vertices[static_cast<std::size_t>(t[2])];
+  return {a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c), a.allFinite() && b.allFinite() && c.allFinite()};
 }
 
 }  // namespace
@@ -48,62 +61,51 @@ void MeshIndex::extend_boxes() const {
   const TriangleSoup& soup = soup_;
   constexpr float nan = std::numeric_limits<float>::quiet_NaN();
   const Box none{Eigen::Vector3f::Constant(nan), Eigen::Vector3f::Constant(nan)};
-  const auto corner_box = [&](std::size_t v) {
-    const Eigen::Vector3d& p = soup.vertices[v];
-    return p.allFinite() ? Box{down(p), up(p)} : none;
-  };
-  // A face's box from its corners' rounded boxes (down/up are monotone: the min of the rounded
-  // corners is the rounded min); NaN when a corner is not finite (min/max would drop it silently).
-  const auto face_box = [&](std::size_t f, const auto& corner) {
-    if (!valid_face(soup, f)) return none;
-    const auto& t = soup.faces[f];
-    const Box a = corner(static_cast<std::size_t>(t[0])), b = corner(static_cast<std::size_t>(t[1])),
-              c = corner(static_cast<std::size_t>(t[2]));
-    if (!a.lo.allFinite() || !b.lo.allFinite() || !c.lo.allFinite()) return none;
-    return Box{a.lo.cwiseMin(b.lo).cwiseMin(c.lo), a.hi.cwiseMax(b.hi).cwiseMax(c.hi)};
-  };
-  // Block boxes: a NaN face box makes its block's box NaN (always opened, see faces_near).
-  const auto merge = [&](Box& block, const Box& box) {
-    if (!box.lo.allFinite() || !block.lo.allFinite()) block = none;
-    else block = {block.lo.cwiseMin(box.lo), block.hi.cwiseMax(box.hi)};
-  };
-  const std::size_t from = face_boxes_.size(), to = soup.faces.size();
-  if (from >= to) return;
-  if (face_boxes_.capacity() < to) {  // room for the faces later fills append
-    face_boxes_.reserve(to + to / 4);
-    block_boxes_.reserve(face_boxes_.capacity() / kBlock + 1);
-  }
-  if (from == 0) {
-    // The first build, O(#F) in every call that fills holes: each vertex rounded once, then
-    // whole blocks of faces, both in parallel on large meshes (a small one is a single task).
-    const std::size_t nv = soup.vertices.size();
-    std::vector<Box> corners(nv);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096), [&](const auto& range) {
-      for (std::size_t v = range.begin(); v != range.end(); ++v) corners[v] = corner_box(v);
-    });
-    const auto cached = [&](std::size_t v) -> const Box& { return corners[v]; };
-    face_boxes_.resize(to);
-    block_boxes_.resize((to + kBlock - 1) / kBlock);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, block_boxes_.size(), 256), [&](const auto& range) {
-      for (std::size_t k = range.begin(); k != range.end(); ++k) {
-        const std::size_t end = std::min(to, (k + 1) * kBlock);
-        block_boxes_[k] = face_boxes_[k * kBlock] = face_box(k * kBlock, cached);
-        for (std::size_t f = k * kBlock + 1; f < end; ++f) merge(block_boxes_[k], face_boxes_[f] = face_box(f, cached));
+  // Block k's box: its valid faces' corners, rounded outwards to float once per block; NaN (the
+  // block always opened) when a corner is not finite or a face has a bad index.
+  const auto block_box = [&](std::size_t k, std::size_t end) {
+    const int nv = static_cast<int>(soup.vertices.size());
+    double lo[3], hi[3];
+    bool finite = true;
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::numeric_limits<double>::infinity();
+      hi[d] = -lo[d];
+    }
+    for (std::size_t f = k * kBlock; f < end; ++f) {
+      const auto& t = soup.faces[f];
+      if (!valid_face(t, nv)) return none;
+      for (int c = 0; c < 3; ++c) {
+        const double* p = soup.vertices[static_cast<std::size_t>(t[c])].data();
+        for (int d = 0; d < 3; ++d) {
+          lo[d] = std::min(lo[d], p[d]);
+          hi[d] = std::max(hi[d], p[d]);
+          finite &= std::abs(p[d]) <= std::numeric_limits<double>::max();
+        }
       }
-    });
-    return;
-  }
-  for (std::size_t f = from; f < to; ++f) {  // faces appended by fills: a few, corners rounded each time
-    face_boxes_.push_back(face_box(f, corner_box));
-    const std::size_t k = f / kBlock;
-    if (k == block_boxes_.size()) block_boxes_.push_back(face_boxes_.back());
-    else merge(block_boxes_[k], face_boxes_.back());
-  }
+    }
+    if (!finite) return none;
+    return Box{down(Eigen::Vector3d(lo[0], lo[1], lo[2])), up(Eigen::Vector3d(hi[0], hi[1], hi[2]))};
+  };
+  const std::size_t to = soup.faces.size();
+  if (boxed_ >= to) return;
+  const std::size_t first_block = boxed_ / kBlock, blocks = (to + kBlock - 1) / kBlock;
+  block_boxes_.resize(blocks);
+  const auto build = [&](std::size_t k0, std::size_t k1) {
+    for (std::size_t k = k0; k < k1; ++k) block_boxes_[k] = block_box(k, std::min(to, (k + 1) * kBlock));
+  };
+  // Only the blocks' boxes are stored (24 bytes per 32 faces): the first build is O(#F) in every
+  // call that fills holes, and a per-face array of boxes cost more in fresh pages than in work.
+  if (blocks - first_block > 4096)
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(first_block, blocks, 1024),
+                      [&](const auto& range) { build(range.begin(), range.end()); });
+  else
+    build(first_block, blocks);
+  boxed_ = to;
 }
 
 void MeshIndex::faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, std::vector<int>& out,
                            std::size_t first) const {
-  if (face_boxes_.size() < soup_.faces.size()) extend_boxes();
+  if (boxed_ < soup_.faces.size()) extend_boxes();
   const Eigen::Vector3f l = down(lo), h = up(hi);
   // "Not apart" rather than "overlapping", so that NaN boxes are always kept.
   const auto near = [&](const Box& b) {
@@ -111,9 +113,13 @@ void MeshIndex::faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
   };
   for (std::size_t k = first / kBlock; k < block_boxes_.size(); ++k) {
     if (!near(block_boxes_[k])) continue;
-    const std::size_t end = std::min(face_boxes_.size(), (k + 1) * kBlock);
-    for (std::size_t f = std::max(k * kBlock, first); f < end; ++f)
-      if (near(face_boxes_[f]) && valid_face(soup_, f)) out.push_back(static_cast<int>(f));
+    const std::size_t end = std::min(boxed_, (k + 1) * kBlock);
+    for (std::size_t f = std::max(k * kBlock, first); f < end; ++f) {
+      if (!valid_face(soup_, f)) continue;
+      const FaceBox b = face_box(soup_, f);
+      if (!b.finite || !((b.hi.array() < lo.array()).any() || (b.lo.array() > hi.array()).any()))
+        out.push_back(static_cast<int>(f));
+    }
   }
 }
 

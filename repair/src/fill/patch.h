@@ -53,9 +53,10 @@ class MeshIndex {
   /// Vertex neighbours of v through its faces (unsorted, unique).
   std::vector<int> neighbours(int v) const;
   /// Faces whose bounding box overlaps the box [lo, hi] (and faces with non-finite corners),
-  /// ascending; appended to `out`. Boxes of every face and of blocks of kBlock consecutive faces
-  /// are built on the first call (O(#F), no sort: it is paid by every call that fills a hole)
-  /// and extended as patches are added; a query skips the blocks whose box misses [lo, hi].
+  /// ascending; appended to `out`. Boxes of blocks of kBlock consecutive faces are built on the
+  /// first call (O(#F), no sort: it is paid by every call that fills a hole) and extended as
+  /// patches are added; a query skips the blocks whose box misses [lo, hi] and tests the faces
+  /// of the others one by one.
   /// Meshes list neighbouring faces close together (grids, subdivisions, marching cubes, PLY
   /// exports), so a query opens few blocks; on a shuffled mesh it degrades to a linear scan.
   /// Only faces from index `first` on are considered (those appended since some point).
@@ -74,7 +75,8 @@ class MeshIndex {
   struct Box {
     Eigen::Vector3f lo, hi;  // rounded outwards; NaN when a corner is not finite
   };
-  mutable std::vector<Box> face_boxes_, block_boxes_;
+  mutable std::vector<Box> block_boxes_;
+  mutable std::size_t boxed_ = 0;  // faces [0, boxed_) are in block_boxes_
 };
 
 /// A patch under construction. Local vertex l < rim.size() is loop position l (soup vertex

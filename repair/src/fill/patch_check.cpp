@@ -32,10 +32,11 @@ bool collinear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::
 }  // namespace
 
 int fans_at(int v, const std::vector<std::array<int, 3>>& faces, DisjointSets& fans) {
-  fans = DisjointSets(faces.size());
+  fans.parent.resize(faces.size());  // reused: this runs for every vertex a patch touches
+  std::iota(fans.parent.begin(), fans.parent.end(), 0);
   // (other corner of an edge at v, a face holding it), sorted: faces sharing an edge at v meet.
-  std::vector<std::pair<int, int>> by_other;
-  by_other.reserve(2 * faces.size());
+  thread_local std::vector<std::pair<int, int>> by_other;
+  by_other.clear();
   for (int f = 0; f < static_cast<int>(faces.size()); ++f)
     for (int c : faces[f])
       if (c != v) by_other.emplace_back(c, f);

@@ -8,7 +8,6 @@
 #include <limits>
 #include <mutex>
 #include <numeric>
-#include <set>
 #include <unordered_map>
 
 #include <Eigen/Householder>
@@ -18,6 +17,7 @@
 #include <f77blas.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include "fill/liepa.h"
 #include "fill/rim_surfaces.h"
@@ -375,32 +375,76 @@ struct PieceSurfaces {
   }
 };
 
-// Fits one RBF per piece (on-surface points of value 0 and their normal offsets) and projects the
-// patch's new vertices onto the combined surface (eq. 12) until a step is below `tol`.
-bool fit_and_project(const CreaseSplit& split, const Position& at, const std::vector<Eigen::Vector3d>& cover,
-                     const HoleShape& shape, const FillOptions& options, Patch& patch, RbfStats& stats,
-                     std::string& why) {
-  const auto t0 = std::chrono::steady_clock::now();
-  PieceSurfaces combined;
-  combined.convex = split.convex;
-  stats.constraints = 0;
-  stats.local_patches = 0;
+// Whether fitting `split` needs the patch's points: a piece with more centres than the local
+// limit is fitted as a partition of unity whose cells must cover the patch (HoleSurface::fit).
+bool fit_needs_cover(const CreaseSplit& split, std::size_t local_limit) {
   for (const SmoothPiece& piece : split.pieces) {
-    std::vector<Eigen::Vector3d> points, normals;
-    std::set<std::array<double, 3>> seen;  // different vertices at one position: one constraint
-    for (std::size_t i = 0; i < piece.vertices.size(); ++i) {
+    std::size_t centres = piece.vertices.size();
+    for (const auto& n : piece.normals) centres += n.squaredNorm() > 0;
+    if (centres > local_limit) return true;  // an upper bound (coincident vertices count once)
+  }
+  return false;
+}
+
+// Fits one RBF per piece: its on-surface points (value 0) and their normal offsets (value d).
+// The pieces' fits are independent: in parallel (a hole across a crease has 2–4).
+bool fit_pieces(const CreaseSplit& split, const Position& at, const std::vector<Eigen::Vector3d>& cover,
+                const HoleShape& shape, const FillOptions& options, PieceSurfaces& combined, RbfStats& stats,
+                std::string& why) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::size_t count = split.pieces.size();
+  combined = PieceSurfaces{};
+  combined.convex = split.convex;
+  combined.surfaces.resize(count);
+  std::vector<std::string> whys(count);
+  std::vector<char> ok(count, 0);
+  const auto fit_one = [&](std::size_t k) {
+    const SmoothPiece& piece = split.pieces[k];
+    // Different vertices at one position give one constraint (the first of them): found by
+    // sorting the positions, no set of nodes.
+    const std::size_t m = piece.vertices.size();
+    std::vector<std::size_t> order(m);
+    std::iota(order.begin(), order.end(), 0);
+    const auto key = [&](std::size_t i) {
       const Eigen::Vector3d& p = at(piece.vertices[i]);
-      if (!seen.insert({p.x(), p.y(), p.z()}).second) continue;
-      points.push_back(p);
+      return std::array<double, 3>{p.x(), p.y(), p.z()};
+    };
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return key(a) < key(b); });
+    std::vector<char> repeated(m, 0);
+    for (std::size_t j = 1; j < m; ++j) repeated[order[j]] = key(order[j]) == key(order[j - 1]);
+    std::vector<Eigen::Vector3d> points, normals;
+    for (std::size_t i = 0; i < m; ++i) {
+      if (repeated[i]) continue;
+      points.push_back(at(piece.vertices[i]));
       normals.push_back(piece.normals[i]);
     }
-    HoleSurface surface;
-    if (!surface.fit(points, normals, options.rbf_offset * shape.edge, cover, options.rbf_local_limit, why)) return false;
-    stats.constraints += surface.constraints();
-    stats.local_patches += surface.local_patches();
-    combined.surfaces.push_back(std::move(surface));
+    ok[k] = combined.surfaces[k].fit(points, normals, options.rbf_offset * shape.edge, cover, options.rbf_local_limit,
+                                     whys[k]);
+  };
+  if (count > 1)
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1), [&](const auto& range) {
+      for (std::size_t k = range.begin(); k != range.end(); ++k) fit_one(k);
+    });
+  else if (count == 1)
+    fit_one(0);
+  stats.constraints = 0;
+  stats.local_patches = 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    if (!ok[k]) {
+      why = whys[k];
+      return false;
+    }
+    stats.constraints += combined.surfaces[k].constraints();
+    stats.local_patches += combined.surfaces[k].local_patches();
   }
   stats.solve_seconds = seconds_since(t0);
+  return true;
+}
+
+// Projects the patch's new vertices onto the combined surface (eq. 12) until a step is below
+// the tolerance.
+bool project(const PieceSurfaces& combined, const HoleShape& shape, const FillOptions& options, Patch& patch,
+             RbfStats& stats, std::string& why) {
   const auto t1 = std::chrono::steady_clock::now();
   const double tol = options.projection_tolerance * shape.edge;
   std::vector<Eigen::Vector3d> moved(patch.points.begin() + patch.rim_size(), patch.points.end());
@@ -431,88 +475,13 @@ bool fit_and_project(const CreaseSplit& split, const Position& at, const std::ve
 
 bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, const HoleShape& shape,
               const FillOptions& options, RbfStats& stats, std::string& why) {
-  // 1. Rings around the hole by breadth-first search over mesh edges (ring 0 = the rim), as far
-  //    as the constraints need; on to the smoothing rings only if the surface is smoothed.
-  std::unordered_map<int, int> ring;
-  std::vector<int> frontier;
-  for (int g : patch.rim)
-    if (ring.emplace(g, 0).second) frontier.push_back(g);
-  int reached = 0;
-  // A ring is also a distance: the search goes on only from vertices within kRingReach · r rim
-  // edges of the rim. On even meshes that stops nothing; through a fan's centre (a cylinder's
-  // cap, a cone's apex) one ring would otherwise jump to the whole far side: hundreds of
-  // centres (the solve is N³) that say nothing about the surface over the hole. The far vertex
-  // itself stays (its faces carry the fan's surface into the crease split).
-  constexpr double kRingReach = 2.0;
-  const auto near_rim = [&](int u, int r) {
-    const double reach = kRingReach * r * shape.edge, reach2 = reach * reach;
-    const Eigen::Vector3d& p = soup.vertices[u];
-    for (int g : patch.rim)
-      if ((soup.vertices[g] - p).squaredNorm() <= reach2) return true;
-    return false;
-  };
-  const auto grow_to = [&](int rings) {
-    for (; reached < rings && !frontier.empty(); ++reached) {
-      std::vector<int> next;
-      for (int v : frontier)
-        for (int u : index.neighbours(v))
-          if (ring.emplace(u, reached + 1).second && near_rim(u, reached + 1)) next.push_back(u);
-      frontier.swap(next);
-    }
-  };
-  grow_to(std::max(options.rbf_constraint_rings, 0));
-  std::vector<int> samples, inner;  // constraint vertices (rings 0..3); those off the rim
-  for (const auto& [v, r] : ring)
-    if (r <= options.rbf_constraint_rings) {
-      samples.push_back(v);
-      if (r >= 1) inner.push_back(v);
-    }
-  std::sort(samples.begin(), samples.end());
-  std::sort(inner.begin(), inner.end());
-  // 2. Laplacian smoothing (eq. 4, uniform weights) of rings 1..5 on a copy, when the surface
-  //    there is noisy (on clean input it would only move correct vertices); the rim stays
-  //    where it is because the patch must meet it exactly. Taubin's μ step after each λ step
-  //    removes the shrinkage that would otherwise pull the fitted surface off a clean one.
-  std::unordered_map<int, Eigen::Vector3d> pos;
+  // Two independent halves, run side by side: the implicit surface from the mesh around the hole
+  // (steps 1–3 and its fit) and the initial patch (step 4). Both only read the soup.
+  std::unordered_map<int, int> ring;  // vertex → ring
+  std::vector<int> samples;           // constraint vertices (rings 0..3), sorted
+  std::unordered_map<int, Eigen::Vector3d> pos;  // smoothed positions
   const Position at{soup.vertices, pos};
-  CreaseSplit split = split_at_creases(soup, index, samples, at, options.rbf_crease_angle, 8);
-  // (Sharp edges everywhere are noise themselves: then no vertex is left out.)
-  const bool few_creases = 2 * split.crease_vertices.size() < inner.size();
-  stats.noise = surface_noise(soup, index, inner, at, few_creases ? split.crease_vertices : std::vector<int>{});
-  stats.smoothed = options.rbf_smoothing_passes > 0 && stats.noise > options.rbf_noise_threshold * shape.edge;
-  if (stats.smoothed) {
-    grow_to(std::max(options.rbf_smoothing_rings, 0));
-    for (const auto& [v, r] : ring) pos[v] = soup.vertices[v];
-    std::vector<int> movable;
-    for (const auto& [v, r] : ring)
-      if (r >= 1 && r <= options.rbf_smoothing_rings) movable.push_back(v);
-    std::sort(movable.begin(), movable.end());
-    std::unordered_map<int, std::vector<int>> nbrs;
-    for (int v : movable) nbrs[v] = index.neighbours(v);
-    for (int pass = 0; pass < options.rbf_smoothing_passes; ++pass)
-      for (const double step : {0.5, -0.53}) {
-        std::vector<Eigen::Vector3d> next(movable.size());
-        for (std::size_t i = 0; i < movable.size(); ++i) {
-          const auto& list = nbrs[movable[i]];
-          Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-          for (int u : list) mean += at(u);
-          next[i] = list.empty() ? at(movable[i]) : Eigen::Vector3d(at(movable[i]) + step * (mean / double(list.size()) - at(movable[i])));
-        }
-        for (std::size_t i = 0; i < movable.size(); ++i) pos[movable[i]] = next[i];
-      }
-  }
-  // 3. Constraints: the vertices of rings 0..3 (value 0) and their normal offsets (value d),
-  //    normals area-weighted from the (smoothed) positions, oriented like the mesh; one set per
-  //    smooth piece when sharp creases cross the rings (rim_surfaces.h).
-  if (stats.smoothed) split = split_at_creases(soup, index, samples, at, options.rbf_crease_angle, 8);
-  stats.pieces = split.pieces.size();
-  // 4. Initial patch: minimum-weight triangulation refined to the target density (the paper's
-  //    barycentric subdivision, done with Liepa's density rule so it works for non-convex
-  //    holes too), faired with a C1 join so that the projection starts near the surface.
-  if (!triangulate(soup, index, patch, why) || !refine(index, patch, options.max_patch_vertices, why) ||
-      !fair(soup, index, patch, true, why))
-    return false;
-  const std::vector<Eigen::Vector3d> cover(patch.points.begin() + patch.rim_size(), patch.points.end());
+  CreaseSplit split;
   // On clean rings (not smoothed) the on-surface points of rings 0..3 pin the surface and the
   // offsets only set the implicit function's sign and scale: rings 0 and 2 carry them, a quarter
   // fewer centres and a 2.4× cheaper solve at the same deviation (bench/README.md, hole filling).
@@ -523,15 +492,117 @@ bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, co
       for (std::size_t i = 0; i < piece.vertices.size(); ++i)
         if (ring.at(piece.vertices[i]) % 2) piece.normals[i].setZero();
   };
-  thin_offsets(split);
-  // 5, 6. The implicit surface and the gradient projection; one surface over the creases when
-  //    the pieces' combination does not converge.
-  if (fit_and_project(split, at, cover, shape, options, patch, stats, why)) return true;
+  PieceSurfaces combined;
+  enum class Fit { later, done, failed } fit = Fit::later;
+  std::string fit_why, patch_why;
+  const auto surface_side = [&] {
+    // 1. Rings around the hole by breadth-first search over mesh edges (ring 0 = the rim), as far
+    //    as the constraints need; on to the smoothing rings only if the surface is smoothed.
+    std::vector<int> frontier;
+    for (int g : patch.rim)
+      if (ring.emplace(g, 0).second) frontier.push_back(g);
+    int reached = 0;
+    // A ring is also a distance: the search goes on only from vertices within kRingReach · r rim
+    // edges of the rim. On even meshes that stops nothing; through a fan's centre (a cylinder's
+    // cap, a cone's apex) one ring would otherwise jump to the whole far side: hundreds of
+    // centres (the solve is N³) that say nothing about the surface over the hole. The far vertex
+    // itself stays (its faces carry the fan's surface into the crease split).
+    constexpr double kRingReach = 2.0;
+    const auto near_rim = [&](int u, int r) {
+      const double reach = kRingReach * r * shape.edge, reach2 = reach * reach;
+      const Eigen::Vector3d& p = soup.vertices[u];
+      for (int g : patch.rim)
+        if ((soup.vertices[g] - p).squaredNorm() <= reach2) return true;
+      return false;
+    };
+    const auto grow_to = [&](int rings) {
+      for (; reached < rings && !frontier.empty(); ++reached) {
+        std::vector<int> next;
+        for (int v : frontier)  // (the ring a vertex gets does not depend on the visiting order)
+          index.for_each_face_of(v, [&](int f) {
+            for (int u : soup.faces[static_cast<std::size_t>(f)])
+              if (ring.emplace(u, reached + 1).second && near_rim(u, reached + 1)) next.push_back(u);
+          });
+        frontier.swap(next);
+      }
+    };
+    grow_to(std::max(options.rbf_constraint_rings, 0));
+    std::vector<int> inner;  // constraint vertices off the rim
+    for (const auto& [v, r] : ring)
+      if (r <= options.rbf_constraint_rings) {
+        samples.push_back(v);
+        if (r >= 1) inner.push_back(v);
+      }
+    std::sort(samples.begin(), samples.end());
+    std::sort(inner.begin(), inner.end());
+    // 2. Laplacian smoothing (eq. 4, uniform weights) of rings 1..5 on a copy, when the surface
+    //    there is noisy (on clean input it would only move correct vertices); the rim stays
+    //    where it is because the patch must meet it exactly. Taubin's μ step after each λ step
+    //    removes the shrinkage that would otherwise pull the fitted surface off a clean one.
+    split = split_at_creases(soup, index, samples, at, options.rbf_crease_angle, 8);
+    // (Sharp edges everywhere are noise themselves: then no vertex is left out.)
+    const bool few_creases = 2 * split.crease_vertices.size() < inner.size();
+    stats.noise = surface_noise(soup, index, inner, at, few_creases ? split.crease_vertices : std::vector<int>{});
+    stats.smoothed = options.rbf_smoothing_passes > 0 && stats.noise > options.rbf_noise_threshold * shape.edge;
+    if (stats.smoothed) {
+      grow_to(std::max(options.rbf_smoothing_rings, 0));
+      for (const auto& [v, r] : ring) pos[v] = soup.vertices[v];
+      std::vector<int> movable;
+      for (const auto& [v, r] : ring)
+        if (r >= 1 && r <= options.rbf_smoothing_rings) movable.push_back(v);
+      std::sort(movable.begin(), movable.end());
+      std::unordered_map<int, std::vector<int>> nbrs;
+      for (int v : movable) nbrs[v] = index.neighbours(v);
+      for (int pass = 0; pass < options.rbf_smoothing_passes; ++pass)
+        for (const double step : {0.5, -0.53}) {
+          std::vector<Eigen::Vector3d> next(movable.size());
+          for (std::size_t i = 0; i < movable.size(); ++i) {
+            const auto& list = nbrs[movable[i]];
+            Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+            for (int u : list) mean += at(u);
+            const Eigen::Vector3d& x = at(movable[i]);
+            next[i] = list.empty() ? x : Eigen::Vector3d(x + step * (mean / double(list.size()) - x));
+          }
+          for (std::size_t i = 0; i < movable.size(); ++i) pos[movable[i]] = next[i];
+        }
+    }
+    // 3. Constraints: the vertices of rings 0..3 (value 0) and their normal offsets (value d),
+    //    normals area-weighted from the (smoothed) positions, oriented like the mesh; one set per
+    //    smooth piece when sharp creases cross the rings (rim_surfaces.h).
+    if (stats.smoothed) split = split_at_creases(soup, index, samples, at, options.rbf_crease_angle, 8);
+    stats.pieces = split.pieces.size();
+    thin_offsets(split);
+    // 5. The implicit surface of each piece, unless a partition of unity must cover the patch.
+    if (!fit_needs_cover(split, options.rbf_local_limit))
+      fit = fit_pieces(split, at, {}, shape, options, combined, stats, fit_why) ? Fit::done : Fit::failed;
+  };
+  // 4. Initial patch: minimum-weight triangulation refined to the target density (the paper's
+  //    barycentric subdivision, done with Liepa's density rule so it works for non-convex
+  //    holes too), faired with a C1 join so that the projection starts near the surface.
+  bool patch_built = false;
+  const auto patch_side = [&] {
+    patch_built = triangulate(soup, index, patch, patch_why) &&
+                  refine(index, patch, options.max_patch_vertices, patch_why) &&
+                  fair(soup, index, patch, true, patch_why);
+  };
+  tbb::parallel_invoke(surface_side, patch_side);
+  if (!patch_built) {
+    why = patch_why;
+    return false;
+  }
+  const std::vector<Eigen::Vector3d> cover(patch.points.begin() + patch.rim_size(), patch.points.end());
+  if (fit == Fit::later)
+    fit = fit_pieces(split, at, cover, shape, options, combined, stats, fit_why) ? Fit::done : Fit::failed;
+  // 6. The gradient projection; one surface over the creases when the pieces' combination does
+  //    not fit or does not converge.
+  if (fit == Fit::done && project(combined, shape, options, patch, stats, why)) return true;
+  if (fit == Fit::failed) why = fit_why;
   if (split.pieces.size() < 2) return false;
   split = one_piece(soup, index, samples, at);
   thin_offsets(split);
   stats.pieces = 1;
-  return fit_and_project(split, at, cover, shape, options, patch, stats, why);
+  return fit_pieces(split, at, cover, shape, options, combined, stats, why) &&
+         project(combined, shape, options, patch, stats, why);
 }
 
 }  // namespace s2c::repair::fill

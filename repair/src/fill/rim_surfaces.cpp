@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 
 namespace s2c::repair::fill {
@@ -23,30 +24,46 @@ Eigen::Vector3d area_normal(const TriangleSoup& soup, const std::vector<int>& fa
 
 double surface_noise(const TriangleSoup& soup, const MeshIndex& index, const std::vector<int>& vertices,
                      const Position& at, const std::vector<int>& skip) {
-  std::unordered_map<int, double> normal_laplacian;
-  std::unordered_map<int, std::vector<int>> nbrs;
-  for (int v : vertices) {
+  // Flat arrays over `vertices` (sorted): this runs for every hole.
+  const std::size_t n = vertices.size();
+  constexpr double none = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> normal_laplacian(n, none);
+  std::vector<std::size_t> first(n + 1, 0);
+  std::vector<int> nbrs;
+  for (std::size_t i = 0; i < n; ++i) {
+    const int v = vertices[i];
+    first[i] = nbrs.size();
     if (std::binary_search(skip.begin(), skip.end(), v)) continue;
-    auto& list = nbrs[v] = index.neighbours(v);
-    const Eigen::Vector3d n = area_normal(soup, index.faces_of(v), at);
-    if (list.empty() || n.squaredNorm() == 0) continue;
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+    index.for_each_face_of(v, [&](int f) {
+      const auto& t = soup.faces[static_cast<std::size_t>(f)];
+      normal += (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0]));
+      for (int c : t)
+        if (c != v) nbrs.push_back(c);
+    });
+    const auto list = nbrs.begin() + static_cast<std::ptrdiff_t>(first[i]);
+    std::sort(list, nbrs.end());
+    nbrs.erase(std::unique(list, nbrs.end()), nbrs.end());
+    if (list == nbrs.end() || !(normal.norm() > 0)) continue;
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (int u : list) mean += at(u);
-    normal_laplacian[v] = (mean / double(list.size()) - at(v)).dot(n);
+    for (auto u = list; u != nbrs.end(); ++u) mean += at(*u);
+    normal_laplacian[i] = (mean / double(nbrs.end() - list) - at(v)).dot(normal.normalized());
   }
+  first[n] = nbrs.size();
   std::vector<double> jumps;
-  for (int v : vertices) {
-    const auto self = normal_laplacian.find(v);
-    if (self == normal_laplacian.end()) continue;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (std::isnan(normal_laplacian[i])) continue;
     double sum = 0;
     int count = 0;
-    for (int u : nbrs[v]) {
-      const auto it = normal_laplacian.find(u);
-      if (it == normal_laplacian.end()) continue;
-      sum += it->second;
+    for (std::size_t k = first[i]; k < first[i + 1]; ++k) {
+      const auto it = std::lower_bound(vertices.begin(), vertices.end(), nbrs[k]);
+      if (it == vertices.end() || *it != nbrs[k]) continue;
+      const double l = normal_laplacian[static_cast<std::size_t>(it - vertices.begin())];
+      if (std::isnan(l)) continue;
+      sum += l;
       ++count;
     }
-    if (count >= 3) jumps.push_back(std::abs(self->second - sum / count));
+    if (count >= 3) jumps.push_back(std::abs(normal_laplacian[i] - sum / count));
   }
   if (jumps.empty()) return 0;
   const auto mid = jumps.begin() + static_cast<std::ptrdiff_t>(jumps.size() / 2);

@@ -25,7 +25,7 @@ struct Position {
   }
 };
 
-/// Noise of the surface around a hole, mm: the median over `vertices` (rings ≥ 1, each with its
+/// Noise of the surface around a hole, mm: the median over `vertices` (sorted; rings ≥ 1, each with its
 /// mesh neighbours) of how much the normal component of the umbrella vector L(v) = mean(N(v)) - v
 /// differs from its mean over the neighbours. On a smooth surface L·n follows the curvature and
 /// changes slowly from vertex to vertex (≈ 0, whatever the curvature); noise of σ gives ≈ σ.
