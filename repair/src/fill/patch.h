@@ -62,7 +62,7 @@ class MeshIndex {
   /// Only faces from index `first` on are considered (those appended since some point).
   void faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, std::vector<int>& out,
                   std::size_t first = 0) const;
-  /// Builds the boxes of every face now: faces_near may then be called from several threads
+  /// Builds the boxes of every block now: faces_near may then be called from several threads
   /// at once as long as no faces are added meanwhile.
   void prepare_boxes() const { extend_boxes(); }
 
