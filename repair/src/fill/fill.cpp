@@ -272,9 +272,11 @@ FillResult finish_hole(TriangleSoup& soup, MeshIndex& index, const Hole& hole, c
       Patch& c = candidates[i];
       c.base = nv;  // planned before earlier holes of the call added their vertices
       if (m == plan.first && i < plan.checked.size()) {
-        // Checked when planned; faces are only appended: the new ones and the topology remain.
+        // Checked when planned; faces are only appended: the new ones and the topology remain
+        // (nothing to re-check when no earlier hole of the call appended any).
         why = plan.checked[i];
-        if (why.empty()) why = fill::check_patch(soup, index, c, {plan.checked_faces, false});
+        if (why.empty() && soup.faces.size() > plan.checked_faces)
+          why = fill::check_patch(soup, index, c, {plan.checked_faces, false});
       } else {
         why = fill::check_patch(soup, index, c);
       }

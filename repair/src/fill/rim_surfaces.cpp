@@ -11,15 +11,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-Eigen::Vector3d area_normal(const TriangleSoup& soup, const std::vector<int>& faces, const Position& at) {
-  Eigen::Vector3d n = Eigen::Vector3d::Zero();
-  for (int f : faces) {
-    const auto& t = soup.faces[static_cast<std::size_t>(f)];
-    n += (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0]));
-  }
-  return n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero();
-}
-
 }  // namespace
 
 double surface_noise(const TriangleSoup& soup, const MeshIndex& index, const std::vector<int>& vertices,
@@ -75,9 +66,15 @@ CreaseSplit one_piece(const TriangleSoup& soup, const MeshIndex& index, const st
                       const Position& at) {
   CreaseSplit out;
   out.pieces.resize(1);
+  out.pieces[0].vertices = vertices;
+  out.pieces[0].normals.reserve(vertices.size());
   for (int v : vertices) {
-    out.pieces[0].vertices.push_back(v);
-    out.pieces[0].normals.push_back(area_normal(soup, index.faces_of(v), at));
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    index.for_each_face_of(v, [&](int f) {
+      const auto& t = soup.faces[static_cast<std::size_t>(f)];
+      n += (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0]));
+    });
+    out.pieces[0].normals.push_back(n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero());
   }
   return out;
 }
@@ -90,14 +87,16 @@ CreaseSplit split_at_creases(const TriangleSoup& soup, const MeshIndex& index, c
   // Faces with all three corners in `vertices` (sorted), their normals and the edges between
   // them; flat sorted arrays rather than hash maps (this runs for every hole).
   const auto in_set = [&](int v) { return std::binary_search(vertices.begin(), vertices.end(), v); };
-  std::vector<int> faces;
-  for (int v : vertices)
-    index.for_each_face_of(v, [&](int f) {
-      const auto& t = soup.faces[static_cast<std::size_t>(f)];
-      if (in_set(t[0]) && in_set(t[1]) && in_set(t[2])) faces.push_back(f);
-    });
+  std::vector<int> faces;  // every face of the vertices once, then those wholly inside
+  for (int v : vertices) index.for_each_face_of(v, [&](int f) { faces.push_back(f); });
   std::sort(faces.begin(), faces.end());
   faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+  faces.erase(std::remove_if(faces.begin(), faces.end(),
+                             [&](int f) {
+                               const auto& t = soup.faces[static_cast<std::size_t>(f)];
+                               return !(in_set(t[0]) && in_set(t[1]) && in_set(t[2]));
+                             }),
+              faces.end());
   std::vector<Eigen::Vector3d> normal(faces.size());
   std::vector<std::pair<std::uint64_t, int>> by_edge;  // (edge key, position in `faces`)
   by_edge.reserve(3 * faces.size());
