@@ -298,7 +298,7 @@ struct Tally {
 };
 
 std::string g_only;
-int kRepeats = 3;  // timings: best of this many runs, ours and CGAL's alike (--repeats)
+int g_repeats = 3;  // timings: best of this many runs, ours and CGAL's alike (--repeats)
 
 // One table row per filler (rbf, liepa, auto, CGAL), with the ratios to CGAL in the same run.
 void print_rows(const char* name, const Tally (&t)[4]) {
@@ -331,11 +331,11 @@ void run_shape(const char* name, const TriangleSoup& shape, double hole_size, co
     if (!cut_hole(shape, rng, hole_size, 2000, cut)) continue;
     ++made;
     const Distance d = exact ? *exact : removed_faces_distance(shape, cut.removed);
-    // Best of kRepeats per hole on both sides (the fills are deterministic; this shared 2-core
+    // Best of g_repeats per hole on both sides (the fills are deterministic; this shared 2-core
     // machine's timing spread is not).
     const auto best_of = [](auto&& fill) {
       Outcome o = fill();
-      for (int rep = 1; rep < kRepeats; ++rep) o.seconds = std::min(o.seconds, fill().seconds);
+      for (int rep = 1; rep < g_repeats; ++rep) o.seconds = std::min(o.seconds, fill().seconds);
       return o;
     };
     t[0].add(best_of([&] { return fill_ours(cut, repair::FillMethod::rbf); }), d);
@@ -381,12 +381,12 @@ void run_shape_together(const char* name, const TriangleSoup& shape, double hole
   for (const Cut& c : cuts) list.push_back(c.hole);
   const Distance d = exact ? *exact : removed_faces_distance(shape, all_removed);
   Tally t[4];
-  // Times are the best of kRepeats runs on both sides (this 2-core machine's timings spread by
+  // Times are the best of g_repeats runs on both sides (this 2-core machine's timings spread by
   // up to 2× from run to run); deviations are the same in every run.
   for (int m = 0; m < 3; ++m) {
     Outcome o;
     o.seconds = 1e300;
-    for (int rep = 0; rep < kRepeats; ++rep) {
+    for (int rep = 0; rep < g_repeats; ++rep) {
       TriangleSoup s = holed;
       repair::FillOptions opt;
       opt.method = m == 0 ? repair::FillMethod::rbf : m == 1 ? repair::FillMethod::liepa : repair::FillMethod::automatic;
@@ -404,7 +404,7 @@ void run_shape_together(const char* name, const TriangleSoup& shape, double hole
   {
     Outcome o;
     o.seconds = 1e300;
-    for (int rep = 0; rep < kRepeats; ++rep) {
+    for (int rep = 0; rep < g_repeats; ++rep) {
       CgalMesh mesh(holed);
       Outcome run;
       run.ok = mesh.built;
@@ -466,7 +466,7 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--no-solve-table")) solve_table = false;
     else if (!std::strcmp(argv[i], "--only") && i + 1 < argc) only = argv[++i];
     else if (!std::strcmp(argv[i], "--protocol") && i + 1 < argc) protocol = argv[++i];
-    else if (!std::strcmp(argv[i], "--repeats") && i + 1 < argc) kRepeats = std::max(1, std::atoi(argv[++i]));
+    else if (!std::strcmp(argv[i], "--repeats") && i + 1 < argc) g_repeats = std::max(1, std::atoi(argv[++i]));
     else {
       std::fprintf(stderr, "usage: s2c-bench-holefill [--holes N] [--real MESH] [--only sphere|cylinder|torus|real] [--protocol each|together|both] [--repeats N] [--rbf-only | --no-solve-table]\n");
       return 2;

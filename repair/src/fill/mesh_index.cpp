@@ -12,11 +12,10 @@
 namespace s2c::repair::fill {
 namespace {
 
-inline bool valid_face(const std::array<int, 3>& t, int nv) {  // bad index: ignored
+bool valid_face(const TriangleSoup& soup, std::size_t f) {  // bad index: ignored
+  const auto& t = soup.faces[f];
+  const int nv = static_cast<int>(soup.vertices.size());
   return (t[0] | t[1] | t[2]) >= 0 && t[0] < nv && t[1] < nv && t[2] < nv;
-}
-inline bool valid_face(const TriangleSoup& soup, std::size_t f) {
-  return valid_face(soup.faces[f], static_cast<int>(soup.vertices.size()));
 }
 
 // float boxes that contain the double ones: the conversion rounds to nearest (half an ulp, 2⁻²⁴
@@ -64,27 +63,15 @@ void MeshIndex::extend_boxes() const {
   // Block k's box: its valid faces' corners, rounded outwards to float once per block; NaN (the
   // block always opened) when a corner is not finite or a face has a bad index.
   const auto block_box = [&](std::size_t k, std::size_t end) {
-    const int nv = static_cast<int>(soup.vertices.size());
-    double lo[3], hi[3];
-    bool finite = true;
-    for (int d = 0; d < 3; ++d) {
-      lo[d] = std::numeric_limits<double>::infinity();
-      hi[d] = -lo[d];
-    }
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
     for (std::size_t f = k * kBlock; f < end; ++f) {
-      const auto& t = soup.faces[f];
-      if (!valid_face(t, nv)) return none;
-      for (int c = 0; c < 3; ++c) {
-        const double* p = soup.vertices[static_cast<std::size_t>(t[c])].data();
-        for (int d = 0; d < 3; ++d) {
-          lo[d] = std::min(lo[d], p[d]);
-          hi[d] = std::max(hi[d], p[d]);
-          finite &= std::abs(p[d]) <= std::numeric_limits<double>::max();
-        }
-      }
+      if (!valid_face(soup, f)) return none;
+      const FaceBox b = face_box(soup, f);
+      if (!b.finite) return none;
+      lo = lo.cwiseMin(b.lo);
+      hi = hi.cwiseMax(b.hi);
     }
-    if (!finite) return none;
-    return Box{down(Eigen::Vector3d(lo[0], lo[1], lo[2])), up(Eigen::Vector3d(hi[0], hi[1], hi[2]))};
+    return Box{down(lo), up(hi)};
   };
   const std::size_t to = soup.faces.size();
   if (boxed_ >= to) return;
@@ -163,13 +150,18 @@ int MeshIndex::edge_faces(int a, int b) const {
 
 std::vector<int> MeshIndex::neighbours(int v) const {
   std::vector<int> out;
+  append_neighbours(v, out);
+  return out;
+}
+
+void MeshIndex::append_neighbours(int v, std::vector<int>& out) const {
+  const auto first = static_cast<std::ptrdiff_t>(out.size());
   for_each_face_of(v, [&](int f) {
     for (int c : soup_.faces[static_cast<std::size_t>(f)])
       if (c != v) out.push_back(c);
   });
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-  return out;
+  std::sort(out.begin() + first, out.end());
+  out.erase(std::unique(out.begin() + first, out.end()), out.end());
 }
 
 }  // namespace s2c::repair::fill

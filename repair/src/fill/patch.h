@@ -50,8 +50,10 @@ class MeshIndex {
   /// How many faces use the undirected edge {a, b}.
   int edge_faces(int a, int b) const;
   bool has_edge(int a, int b) const { return edge_faces(a, b) > 0; }
-  /// Vertex neighbours of v through its faces (unsorted, unique).
+  /// Vertex neighbours of v through its faces (ascending, unique).
   std::vector<int> neighbours(int v) const;
+  /// The same appended to `out` (no allocation when `out` has room).
+  void append_neighbours(int v, std::vector<int>& out) const;
   /// Faces whose bounding box overlaps the box [lo, hi] (and faces with non-finite corners),
   /// ascending; appended to `out`. Boxes of blocks of kBlock consecutive faces are built on the
   /// first call (O(#F), no sort: it is paid by every call that fills a hole) and extended as

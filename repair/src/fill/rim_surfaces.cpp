@@ -11,6 +11,16 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
+// Unit area-weighted normal of vertex v from its faces at positions `at`, zero when degenerate.
+Eigen::Vector3d area_normal(const TriangleSoup& soup, const MeshIndex& index, int v, const Position& at) {
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  index.for_each_face_of(v, [&](int f) {
+    const auto& t = soup.faces[static_cast<std::size_t>(f)];
+    n += (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0]));
+  });
+  return n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero();
+}
+
 }  // namespace
 
 double surface_noise(const TriangleSoup& soup, const MeshIndex& index, const std::vector<int>& vertices,
@@ -25,20 +35,13 @@ double surface_noise(const TriangleSoup& soup, const MeshIndex& index, const std
     const int v = vertices[i];
     first[i] = nbrs.size();
     if (std::binary_search(skip.begin(), skip.end(), v)) continue;
-    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
-    index.for_each_face_of(v, [&](int f) {
-      const auto& t = soup.faces[static_cast<std::size_t>(f)];
-      normal += (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0]));
-      for (int c : t)
-        if (c != v) nbrs.push_back(c);
-    });
+    index.append_neighbours(v, nbrs);
     const auto list = nbrs.begin() + static_cast<std::ptrdiff_t>(first[i]);
-    std::sort(list, nbrs.end());
-    nbrs.erase(std::unique(list, nbrs.end()), nbrs.end());
-    if (list == nbrs.end() || !(normal.norm() > 0)) continue;
+    const Eigen::Vector3d normal = area_normal(soup, index, v, at);
+    if (list == nbrs.end() || normal.squaredNorm() == 0) continue;
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     for (auto u = list; u != nbrs.end(); ++u) mean += at(*u);
-    normal_laplacian[i] = (mean / double(nbrs.end() - list) - at(v)).dot(normal.normalized());
+    normal_laplacian[i] = (mean / double(nbrs.end() - list) - at(v)).dot(normal);
   }
   first[n] = nbrs.size();
   std::vector<double> jumps;
@@ -68,14 +71,7 @@ CreaseSplit one_piece(const TriangleSoup& soup, const MeshIndex& index, const st
   out.pieces.resize(1);
   out.pieces[0].vertices = vertices;
   out.pieces[0].normals.reserve(vertices.size());
-  for (int v : vertices) {
-    Eigen::Vector3d n = Eigen::Vector3d::Zero();
-    index.for_each_face_of(v, [&](int f) {
-      const auto& t = soup.faces[static_cast<std::size_t>(f)];
-      n += (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0]));
-    });
-    out.pieces[0].normals.push_back(n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero());
-  }
+  for (int v : vertices) out.pieces[0].normals.push_back(area_normal(soup, index, v, at));
   return out;
 }
 
