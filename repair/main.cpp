@@ -16,9 +16,11 @@ int main(int argc, char** argv) {
       "Surface repair comes first and keeps every input triangle: duplicate/degenerate faces and\n"
       "loose fragments are removed, orientation is made consistent, gaps are closed by vertex-edge\n"
       "contraction, holes are found (nested holes split at their common points) and filled (RBF or\n"
-      "Liepa; big planar holes come out flat). When that is not enough (non-manifold edges,\n"
-      "self-intersections), the surface is rebuilt from a vector-field distance function on a sparse\n"
-      "narrow band (Marching Cubes) and decimated back to a sensible triangle count.\n"
+      "Liepa; big planar holes come out flat; a scan's unseen end face, its rim jagged where the\n"
+      "reconstruction stopped, is first trimmed flush with one plane: see --end-cap). When that is\n"
+      "not enough (non-manifold edges, self-intersections), the surface is rebuilt from a\n"
+      "vector-field distance function on a sparse narrow band (Marching Cubes) and decimated back\n"
+      "to a sensible triangle count.\n"
       "--report lists the defects before and after and what every step did.\n"
       "Examples: scan2cad repair mesh.ply -o repaired.ply --report repair.json\n"
       "          scan2cad repair broken.stl -o fixed.ply --strategy volumetric --voxel 0.2",
@@ -34,6 +36,13 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "surface", "volumetric"}))->capture_default_str();
   app.add_option("--holes", holes, "Hole filling: auto (per hole), rbf, liepa, none (leave holes to volumetric)")
       ->check(CLI::IsMember({"auto", "rbf", "liepa", "none"}))->capture_default_str();
+  app.add_option("--end-cap", o.fill.end_cap_tolerance,
+                 "A hole whose rim lies within this fraction of its diameter of a plane, with the whole "
+                 "mesh on one side of it and straight walls around it (a chamfer, a cylinder), is the "
+                 "part's unseen end face: the band of mesh between its rim's lowest and highest points is "
+                 "cut off by the plane through the highest, and the hole filled flat there (with --holes "
+                 "auto; 0 = off)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
   app.add_option("--gap", o.gap_tolerance, "Close gaps up to this width, mm (default: half the mean boundary edge)");
   auto* voxel = app.add_option("--voxel", o.volumetric.voxel, "Volumetric grid spacing, mm (default: longest side / 320, coarsened to sqrt(area / 60000) for large surfaces)");
   app.add_option("--resolution", o.volumetric.resolution, "Volumetric cells along the longest side (instead of --voxel)")
@@ -76,7 +85,7 @@ int main(int argc, char** argv) {
 
     s2c::Report report("scan2cad-repair");
     report.parameters() = {{"input", input},       {"output", output},          {"strategy", strategy},
-                           {"holes", holes},       {"gap_mm", o.gap_tolerance}, {"voxel_mm", o.volumetric.voxel},
+                           {"holes", holes},       {"end_cap", o.fill.end_cap_tolerance}, {"gap_mm", o.gap_tolerance}, {"voxel_mm", o.volumetric.voxel},
                            {"resolution", o.volumetric.resolution}, {"band", o.volumetric.band},
                            {"interp", interp},     {"sign", sign},              {"extract", extract},
                            {"decimate_voxels", o.decimate_tolerance_voxels}};

@@ -83,7 +83,10 @@ void close_and_fill(TriangleSoup& soup, const RepairOptions& o, nlohmann::json& 
   if (!o.fill_holes) return;
   t0 = Clock::now();
   HoleStats hs;
-  const std::vector<Hole> holes = find_holes(soup, &hs);
+  std::vector<Hole> holes = find_holes(soup, &hs);
+  // The part's unseen end faces: their jagged rims are cut flush with one plane first.
+  std::vector<EndCapTrim> caps;
+  if (o.fill.method == FillMethod::automatic) caps = trim_end_caps(soup, holes, o.fill, &hs);
   const std::vector<FillResult> filled = fill_holes(soup, holes, o.fill);
   nlohmann::json list = nlohmann::json::array();
   std::size_t n_filled = 0;
@@ -100,6 +103,9 @@ void close_and_fill(TriangleSoup& soup, const RepairOptions& o, nlohmann::json& 
                     {"new_faces", f.new_faces},
                     {"seconds", f.seconds}});
   }
+  for (const EndCapTrim& c : caps)
+    list[c.hole]["end_cap_trim"] = {{"depth_mm", c.depth_mm}, {"faces_removed", c.faces_removed},
+                                    {"faces_clipped", c.faces_clipped}, {"vertices_snapped", c.vertices_snapped}};
   rep["holes"].push_back({{"round", round}, {"boundary_edges", hs.boundary_edges}, {"single", hs.single_holes},
                           {"nested", hs.nested_holes}, {"common_points", hs.common_points},
                           {"to_fill", hs.holes_out}, {"filled", n_filled}, {"list", list}});

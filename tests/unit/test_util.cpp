@@ -1,4 +1,5 @@
 // Implementation of the shared test helpers, linked into every test executable.
+#include <cmath>
 #include <map>
 
 #include "test_util.h"
@@ -35,6 +36,36 @@ TriangleSoup icosphere(const Eigen::Vector3d& center, double radius, int levels)
   }
   for (auto& p : v) s.vertices.push_back(center + radius * p);
   s.faces = f;
+  return s;
+}
+
+TriangleSoup revolved(const std::function<double(double)>& r, const std::vector<double>& zs, int segments,
+                      bool close_bottom, bool close_top) {
+  TriangleSoup s;
+  const int rows = static_cast<int>(zs.size());
+  for (int j = 0; j < rows; ++j)
+    for (int i = 0; i < segments; ++i) {
+      const double a = 2 * M_PI * i / segments + (j % 2) * M_PI / segments;
+      s.vertices.push_back({r(zs[j]) * std::cos(a), r(zs[j]) * std::sin(a), zs[j]});
+    }
+  const auto id = [&](int i, int j) { return j * segments + (i % segments); };
+  for (int j = 0; j + 1 < rows; ++j)
+    for (int i = 0; i < segments; ++i) {
+      if (j % 2 == 0) {
+        s.faces.push_back({id(i, j), id(i + 1, j), id(i, j + 1)});
+        s.faces.push_back({id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
+      } else {
+        s.faces.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+        s.faces.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      }
+    }
+  const int bottom = static_cast<int>(s.vertices.size()), top = bottom + (close_bottom ? 1 : 0);
+  if (close_bottom) s.vertices.push_back({0, 0, zs.front()});
+  if (close_top) s.vertices.push_back({0, 0, zs.back()});
+  for (int i = 0; i < segments; ++i) {
+    if (close_bottom) s.faces.push_back({bottom, id(i + 1, 0), id(i, 0)});
+    if (close_top) s.faces.push_back({top, id(i, rows - 1), id(i + 1, rows - 1)});
+  }
   return s;
 }
 

@@ -68,4 +68,10 @@ inline void expect_invalid_input(const std::function<void()>& f, std::initialize
 /// Icosphere: subdivided icosahedron projected to the sphere (outward).
 TriangleSoup icosphere(const Eigen::Vector3d& center, double radius, int levels);
 
+/// A surface of revolution about z (outward): rows of `segments` vertices at the heights `zs`
+/// (ascending) with radius r(z), every other row staggered by half a segment; closed by a fan
+/// at the bottom and/or the top when asked (centre vertices after the rows, bottom first).
+TriangleSoup revolved(const std::function<double(double)>& r, const std::vector<double>& zs, int segments,
+                      bool close_bottom, bool close_top);
+
 }  // namespace s2c::test

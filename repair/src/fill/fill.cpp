@@ -33,17 +33,12 @@ const char* to_string(FillMethod m) {
   return "?";
 }
 
-namespace {
-
-using fill::HoleShape;
-using fill::MeshIndex;
-using fill::Patch;
-
 constexpr double kPi = 3.14159265358979323846;
 
-// The rim's plane, size and surroundings: everything the method choice looks at.
-HoleShape analyse(const TriangleSoup& soup, const MeshIndex& index, const std::vector<int>& loop,
-                  const FillOptions& options) {
+namespace fill {
+
+HoleShape analyse_rim(const TriangleSoup& soup, const MeshIndex& index, const std::vector<int>& loop, double edge_length,
+                      double planar_tolerance) {
   HoleShape s;
   const int n = static_cast<int>(loop.size());
   double perimeter = 0;
@@ -54,7 +49,7 @@ HoleShape analyse(const TriangleSoup& soup, const MeshIndex& index, const std::v
     s.centroid += a / n;
     area += a.cross(b);
   }
-  s.edge = options.edge_length > 0 ? options.edge_length : perimeter / n;
+  s.edge = edge_length > 0 ? edge_length : perimeter / n;
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
   for (int g : loop) {
     const Eigen::Vector3d d = soup.vertices[g] - s.centroid;
@@ -69,7 +64,7 @@ HoleShape analyse(const TriangleSoup& soup, const MeshIndex& index, const std::v
   double worst = 0;
   for (int g : loop) worst = std::max(worst, std::abs((soup.vertices[g] - s.centroid).dot(normal)));
   s.planarity = s.diameter > 0 ? worst / s.diameter : 0;
-  s.planar = s.planarity <= options.planar_tolerance;
+  s.planar = s.planarity <= planar_tolerance;
   // Angle between the mesh faces on the rim and the rim plane (0°: flat ground, 90°: a wall).
   double sum = 0;
   int count = 0;
@@ -83,8 +78,28 @@ HoleShape analyse(const TriangleSoup& soup, const MeshIndex& index, const std::v
     ++count;
   }
   s.wall_angle_deg = count ? sum / count : 0;
-  s.flat_fill = s.planar && (s.wall_angle_deg < 10 || s.wall_angle_deg > 60);
   return s;
+}
+
+}  // namespace fill
+
+namespace {
+
+using fill::HoleShape;
+using fill::MeshIndex;
+using fill::Patch;
+
+// The median length of the edges of the faces at the rim's vertices.
+double median_edge_around(const TriangleSoup& soup, const MeshIndex& index, const std::vector<int>& loop) {
+  std::vector<double> lengths;
+  for (int v : loop)
+    index.for_each_face_of(v, [&](int f) {
+      const auto& t = soup.faces[static_cast<std::size_t>(f)];
+      for (int i = 0; i < 3; ++i) lengths.push_back((soup.vertices[t[i]] - soup.vertices[t[(i + 1) % 3]]).norm());
+    });
+  if (lengths.empty()) return 0;
+  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+  return lengths[lengths.size() / 2];
 }
 
 // Liepa's candidates, best first: the faired patch, then the refined one before fairing (its
@@ -229,11 +244,20 @@ Plan plan_hole(const TriangleSoup& soup, const MeshIndex& index, const Hole& hol
     return plan;
   }
   plan.done = false;
-  plan.shape = analyse(soup, index, loop, options);
+  plan.shape = fill::analyse_rim(soup, index, loop, options.edge_length, options.planar_tolerance);
+  plan.shape.end_cap = hole.end_cap;
+  // A trimmed rim's edges are cut short where the plane crossed faces: the cap takes the edge
+  // length of the mesh around it instead.
+  if (hole.end_cap && !(options.edge_length > 0)) plan.shape.edge = median_edge_around(soup, index, loop);
+  plan.shape.flat_fill =
+      hole.end_cap || (plan.shape.planar && (plan.shape.wall_angle_deg < 10 || plan.shape.wall_angle_deg > 60));
   const HoleShape& shape = plan.shape;
   plan.first = options.method;
   if (plan.first == FillMethod::automatic) {
-    if (shape.flat_fill) {
+    if (shape.end_cap) {
+      plan.first = FillMethod::liepa;
+      r.choice = "auto: the part's unseen end face (trimmed flush with its plane) → liepa, flat";
+    } else if (shape.flat_fill) {
       plan.first = FillMethod::liepa;
       r.choice = "auto: planar rim (" + std::to_string(shape.planarity) + " of diameter), faces " +
                  std::to_string(int(std::lround(shape.wall_angle_deg))) + "° off its plane → liepa, flat";

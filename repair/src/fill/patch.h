@@ -106,8 +106,14 @@ struct HoleShape {
   double planarity = 0;         ///< max rim distance from the best-fit plane / diameter
   double wall_angle_deg = 0;    ///< mean angle between the rim's mesh faces and the rim plane
   bool planar = false;          ///< rim in one plane (within FillOptions::planar_tolerance)
+  bool end_cap = false;         ///< the part's unseen end face, trimmed flat (Hole::end_cap)
   bool flat_fill = false;       ///< fill with the rim plane: planar rim on flat ground or a crease
 };
+
+/// The rim's plane, size and surroundings: everything the method choice looks at (flat_fill and
+/// end_cap are left to the caller). `edge_length` 0: the mean rim edge.
+HoleShape analyse_rim(const TriangleSoup& soup, const MeshIndex& index, const std::vector<int>& loop, double edge_length,
+                      double planar_tolerance);
 
 /// Unit normal of triangle (a, b, c), or zero when degenerate.
 inline Eigen::Vector3d unit_normal(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {

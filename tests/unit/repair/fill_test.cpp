@@ -107,33 +107,11 @@ std::vector<Hole> grid_hole(const TriangleSoup& s) {
   return holes;
 }
 
-// Adds a closed cylinder (axis z, radius r, z in [0, height]) with fan-triangulated caps.
+// A closed cylinder (axis z, radius r, z in [0, height]) with fan-triangulated caps.
 TriangleSoup cylinder(double r, double height, int segments, int rings) {
-  TriangleSoup s;
-  for (int j = 0; j <= rings; ++j)
-    for (int i = 0; i < segments; ++i) {
-      const double a = 2 * M_PI * i / segments + (j % 2) * M_PI / segments;  // staggered rows
-      s.vertices.push_back({r * std::cos(a), r * std::sin(a), height * j / rings});
-    }
-  const auto id = [&](int i, int j) { return j * segments + (i % segments); };
-  for (int j = 0; j < rings; ++j)
-    for (int i = 0; i < segments; ++i) {
-      if (j % 2 == 0) {
-        s.faces.push_back({id(i, j), id(i + 1, j), id(i, j + 1)});
-        s.faces.push_back({id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
-      } else {
-        s.faces.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-        s.faces.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      }
-    }
-  const int bottom = static_cast<int>(s.vertices.size()), top = bottom + 1;
-  s.vertices.push_back({0, 0, 0});
-  s.vertices.push_back({0, 0, height});
-  for (int i = 0; i < segments; ++i) {
-    s.faces.push_back({bottom, id(i + 1, 0), id(i, 0)});
-    s.faces.push_back({top, id(i, rings), id(i + 1, rings)});
-  }
-  return s;
+  std::vector<double> zs;
+  for (int j = 0; j <= rings; ++j) zs.push_back(height * j / rings);
+  return test::revolved([r](double) { return r; }, zs, segments, true, true);
 }
 
 // A height field z = h(x, y) over [0, n]² (cell size 1), triangles facing +z.

@@ -27,6 +27,9 @@ struct FillOptions {
   /// the rim are within 10° of the plane (flat ground) or more than 60° off it (a crease: a
   /// missing planar face such as a turntable scan's bottom); every other hole gets RBF.
   double planar_tolerance = 1e-3;
+  /// trim_end_caps: a rim within this fraction of its diameter of a plane (a reconstruction's
+  /// trimmed rim is jagged) can be the part's unseen end face; see there. 0 = off.
+  double end_cap_tolerance = 0.02;
   /// RBF: passes of Laplacian smoothing (eq. 4, λ = 0.5, each followed by Taubin's μ = -0.53
   /// step so that clean surfaces do not shrink) over the `rbf_smoothing_rings`-ring around the
   /// hole, on a copy used for the fit only (the mesh itself is not moved); 0 = off. Only where
@@ -76,6 +79,27 @@ struct FillResult {
 /// vertex that already had several fans (a pinch no patch can undo) does not block the fill.
 std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& holes,
                                    const FillOptions& options = {});
+
+/// The part's end faces a scan never saw (the face a part stands on during a turntable scan):
+/// a hole whose rim lies within `options.end_cap_tolerance` of its diameter of a plane, with the
+/// whole mesh on one side of that plane (the hole is the part's extreme end along the plane's
+/// normal) and around the rim a surface whose angle to the plane does not turn over a band of
+/// 5–25 % of the hole's radius (a chamfer, a cylinder wall: their continuation is the end face;
+/// a sphere's pole turns and is left to RBF). Its rim is jagged where the reconstruction was
+/// trimmed; the band of mesh between the rim's lowest and highest vertices is cut off by the
+/// plane through the highest one (faces across it are clipped, vertices within a tenth of an
+/// edge snapped onto it), so that the new rim lies in one plane and the fill meets the walls
+/// in a clean crease. The holes are found again afterwards; those of the trimmed caps get
+/// Hole::end_cap (fill_holes fills them flat). When the new boundary is not one simple loop in
+/// the plane the soup is left as it was. Faces and vertices are only removed near the caps;
+/// trimmed-off vertices stay in the soup, unreferenced. Returns how many caps were trimmed.
+struct EndCapTrim {
+  std::size_t hole = 0;          ///< its index in the holes found again
+  double depth_mm = 0;           ///< distance from the rim's lowest vertex to the cut plane
+  std::size_t faces_removed = 0, faces_clipped = 0, vertices_snapped = 0;
+};
+std::vector<EndCapTrim> trim_end_caps(TriangleSoup& soup, std::vector<Hole>& holes, const FillOptions& options,
+                                      HoleStats* stats = nullptr);
 
 const char* to_string(FillMethod m);
 

@@ -21,6 +21,9 @@ struct Hole {
   Origin origin = Origin::single;
   double perimeter = 0;   ///< mm
   double diameter = 0;    ///< largest distance between two loop vertices, mm
+  /// The part's unseen end face, its rim trimmed flush with one plane (trim_end_caps, fill.h):
+  /// filled flat in that plane.
+  bool end_cap = false;
 };
 
 struct HoleStats {
