@@ -86,11 +86,16 @@ f = json.load(open(os.path.join(sys.argv[1], "features.json")))
 assert f["format"] == "scan2cad.features/1", f["format"]
 assert f["mesh"]["faces"] > 10000, f["mesh"]
 e = json.load(open(sys.argv[2]))
-print("features of the repaired plate scan: primitive recall %.3f, line F1 %.3f, constraint recall %.3f"
-      % (e["primitive_recall"], e["line_f1"], e["constraint_recall"]))
+print("features of the repaired plate scan: primitive recall %.3f, line F1 %.3f, constraint P %.3f R %.3f, "
+      "circle radius error max %.2f %%" % (e["primitive_recall"], e["line_f1"], e["constraint_precision"],
+                                          e["constraint_recall"], 100 * e["circle_radius_err_max"]))
 assert e["primitive_recall"] >= 0.9, e
 assert e["line_f1"] >= 0.9, e
 assert e["constraint_recall"] >= 0.9, e
+assert e["constraint_precision"] >= 0.98, e
+# The hole rims are the plane ∩ cylinder circles, not the crest of the scan's rounded crease
+# (which is 2.5 % wider).
+assert e["circle_radius_err_max"] <= 0.01, e
 PY
 # Re-run: everything up to date.
 "$bin/scan2cad" run --from "replay:$src/fixtures/scans/plate" --out "$work/out" --reference "$ref" --quiet
