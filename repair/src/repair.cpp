@@ -104,7 +104,7 @@ void close_and_fill(TriangleSoup& soup, const RepairOptions& o, nlohmann::json& 
                     {"seconds", f.seconds}});
   }
   for (const EndCapTrim& c : caps)
-    list[c.hole]["end_cap_trim"] = {{"depth_mm", c.depth_mm}, {"faces_removed", c.faces_removed},
+    if (c.hole < list.size()) list[c.hole]["end_cap_trim"] = {{"depth_mm", c.depth_mm}, {"faces_removed", c.faces_removed},
                                     {"faces_clipped", c.faces_clipped}, {"vertices_snapped", c.vertices_snapped}};
   rep["holes"].push_back({{"round", round}, {"boundary_edges", hs.boundary_edges}, {"single", hs.single_holes},
                           {"nested", hs.nested_holes}, {"common_points", hs.common_points},

@@ -36,9 +36,28 @@ bool simple_loop(const std::vector<int>& loop) {
 // rounds towards the missing face.
 bool straight_walls(const TriangleSoup& soup, const MeshIndex& index, const std::vector<int>& loop, const HoleShape& s) {
   const double radius = 0.5 * s.diameter, lo = 0.05 * radius, hi = 0.25 * radius;
+  // Distance to the rim, looked up in a grid of rim vertices with cells of size `hi` (only
+  // distances up to `hi` matter): a few cells instead of the whole rim per vertex.
+  const auto cell_of = [&](const Eigen::Vector3d& p) {
+    return Eigen::Vector3i((p / hi).array().floor().cast<int>());
+  };
+  const auto key = [](const Eigen::Vector3i& c) {
+    return (std::uint64_t(std::uint32_t(c.x()) & 0x1fffff) << 42) | (std::uint64_t(std::uint32_t(c.y()) & 0x1fffff) << 21) |
+           (std::uint64_t(std::uint32_t(c.z()) & 0x1fffff));
+  };
+  std::unordered_map<std::uint64_t, std::vector<int>> grid;
+  for (int g : loop) grid[key(cell_of(soup.vertices[g]))].push_back(g);
   const auto rim_distance = [&](const Eigen::Vector3d& p) {
     double best = std::numeric_limits<double>::infinity();
-    for (int g : loop) best = std::min(best, (soup.vertices[g] - p).squaredNorm());
+    if (!p.allFinite()) return best;
+    const Eigen::Vector3i c = cell_of(p);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = grid.find(key(c + Eigen::Vector3i(dx, dy, dz)));
+          if (it == grid.end()) continue;
+          for (int g : it->second) best = std::min(best, (soup.vertices[g] - p).squaredNorm());
+        }
     return std::sqrt(best);
   };
   std::unordered_set<int> seen(loop.begin(), loop.end());
@@ -74,29 +93,30 @@ bool straight_walls(const TriangleSoup& soup, const MeshIndex& index, const std:
 }
 
 // The cut for `hole` when it is an end cap (see trim_end_caps), nothing otherwise.
-std::optional<Cut> end_cap_cut(const TriangleSoup& soup, const MeshIndex& index, const Hole& hole,
-                               const FillOptions& options) {
+std::optional<Cut> end_cap_cut(const TriangleSoup& soup, const MeshIndex& index, const std::vector<int>& referenced,
+                               const Hole& hole, const FillOptions& options) {
   const auto& loop = hole.loop;
   if (hole.origin != Hole::Origin::single || loop.size() < 12 || !simple_loop(loop)) return std::nullopt;
+  if (options.max_hole_vertices && loop.size() > options.max_hole_vertices) return std::nullopt;  // left open anyway
   for (int g : loop)
     if (g < 0 || static_cast<std::size_t>(g) >= soup.vertices.size() || !soup.vertices[g].allFinite())
       return std::nullopt;
   const HoleShape s = fill::analyse_rim(soup, index, loop, 0, options.planar_tolerance);
   // Flat ground (faces within 10° of the plane) is filled flat anyway; nothing to trim there.
   if (!(s.diameter > 0) || s.planarity > options.end_cap_tolerance || s.wall_angle_deg < 10) return std::nullopt;
+  // The local test first: the global one below scans the whole mesh.
+  if (!straight_walls(soup, index, loop, s)) return std::nullopt;
   // The whole mesh on one side of the plane (beyond it by no more than the rim's own spread).
   const double spread = s.planarity * s.diameter + 1e-9 * s.diameter;
   double low = 0, high = 0;
-  for (const auto& t : soup.faces)  // (unreferenced vertices do not count)
-    for (int v : t) {
-      const auto& p = soup.vertices[static_cast<std::size_t>(v)];
-      if (!p.allFinite()) continue;
-      const double h = (p - s.centroid).dot(s.normal);
-      low = std::min(low, h), high = std::max(high, h);
-    }
-  if (low < -spread && high > spread) return std::nullopt;
+  for (int v : referenced) {
+    const auto& p = soup.vertices[static_cast<std::size_t>(v)];
+    if (!p.allFinite()) continue;
+    const double h = (p - s.centroid).dot(s.normal);
+    low = std::min(low, h), high = std::max(high, h);
+    if (low < -spread && high > spread) return std::nullopt;
+  }
   if (low >= -spread && high <= spread) return std::nullopt;  // a flat mesh: no side
-  if (!straight_walls(soup, index, loop, s)) return std::nullopt;
   Cut cut;
   cut.inward = low < -spread ? Eigen::Vector3d(-s.normal) : s.normal;
   double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
@@ -146,7 +166,7 @@ void remove_debris(TriangleSoup& soup, const std::vector<int>& on_plane, const C
 }
 
 // Cuts the band between the rim and the plane off; returns the plane's vertices (snapped and
-// new), or nothing when the cut found nothing to do.
+// new), or nothing (the soup untouched) when a corner there is not finite.
 std::vector<int> apply_cut(TriangleSoup& soup, const MeshIndex& index, const std::vector<int>& loop, const Cut& cut,
                            EndCapTrim& trim) {
   const auto height = [&](int v) { return (soup.vertices[static_cast<std::size_t>(v)] - cut.point).dot(cut.inward); };
@@ -170,17 +190,21 @@ std::vector<int> apply_cut(TriangleSoup& soup, const MeshIndex& index, const std
   for (int v : band) index.for_each_face_of(v, [&](int f) { faces.push_back(f); });
   std::sort(faces.begin(), faces.end());
   faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
-  // Snap: every corner of those faces and every rim vertex within `snap` of the plane.
+  // Snap: every corner of those faces and every rim vertex within `snap` of the plane, once.
+  std::vector<int> corners(loop);
+  for (int f : faces)
+    for (int v : soup.faces[static_cast<std::size_t>(f)]) corners.push_back(v);
+  std::sort(corners.begin(), corners.end());
+  corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+  for (int v : corners)
+    if (!soup.vertices[static_cast<std::size_t>(v)].allFinite()) return {};  // no cut through that
   std::vector<int> on_plane;
-  const auto snap = [&](int v) {
+  for (int v : corners) {
     const double h = height(v);
-    if (std::abs(h) > cut.snap) return;
+    if (!(std::abs(h) <= cut.snap)) continue;
     if (h != 0) soup.vertices[static_cast<std::size_t>(v)] -= h * cut.inward, ++trim.vertices_snapped;
     on_plane.push_back(v);
-  };
-  for (int f : faces)
-    for (int v : soup.faces[static_cast<std::size_t>(f)]) snap(v);
-  for (int g : loop) snap(g);
+  }
   // Clip: each face keeps the polygon of its corners on or above the plane and the crossings of
   // its edges (one new vertex per crossed edge, shared by both faces).
   const bool normals = soup.normals.size() == soup.vertices.size();
@@ -251,6 +275,9 @@ std::vector<EndCapTrim> trim_end_caps(TriangleSoup& soup, std::vector<Hole>& hol
                                       HoleStats* stats) {
   std::vector<EndCapTrim> out;
   if (!(options.end_cap_tolerance > 0) || holes.empty()) return out;
+  const auto nv = static_cast<int>(soup.vertices.size());
+  for (const auto& t : soup.faces)
+    if (std::min({t[0], t[1], t[2]}) < 0 || std::max({t[0], t[1], t[2]}) >= nv) return out;  // (find_holes throws)
   std::vector<std::vector<int>> caps;  // plane vertices of each trimmed cap
   const auto in_cap = [&](int v) {
     return std::any_of(caps.begin(), caps.end(), [&](const auto& c) { return std::binary_search(c.begin(), c.end(), v); });
@@ -259,17 +286,28 @@ std::vector<EndCapTrim> trim_end_caps(TriangleSoup& soup, std::vector<Hole>& hol
   // tested once (by its smallest vertex: the list is found again after every cut).
   std::unordered_set<int> tested;
   std::optional<MeshIndex> index;
+  std::vector<int> referenced;  // vertices of faces, for the one-side test
   for (std::size_t h = 0; h < holes.size(); ++h) {
     const auto& loop = holes[h].loop;
     if (loop.empty() || in_cap(loop.front()) || !tested.insert(*std::min_element(loop.begin(), loop.end())).second)
       continue;
-    if (!index) index.emplace(soup);
-    const std::optional<Cut> cut = end_cap_cut(soup, *index, holes[h], options);
+    if (!index) {
+      index.emplace(soup);
+      referenced.clear();
+      for (const auto& t : soup.faces) referenced.insert(referenced.end(), t.begin(), t.end());
+      std::sort(referenced.begin(), referenced.end());
+      referenced.erase(std::unique(referenced.begin(), referenced.end()), referenced.end());
+    }
+    const std::optional<Cut> cut = end_cap_cut(soup, *index, referenced, holes[h], options);
     if (!cut) continue;
     const TriangleSoup before = soup;
     EndCapTrim trim;
     trim.depth_mm = cut->depth;
     std::vector<int> plane = apply_cut(soup, *index, holes[h].loop, *cut, trim);
+    if (plane.empty()) {  // no plane vertex: nothing to fill flat
+      soup = before;
+      continue;
+    }
     // Accept only when the holes that now run through the plane's vertices lie wholly in the
     // plane, as simple loops: the cap's rim, and maybe small holes where the surface near the
     // rim was within the snap distance of the plane (in-plane faces around them).
@@ -285,19 +323,28 @@ std::vector<EndCapTrim> trim_end_caps(TriangleSoup& soup, std::vector<Hole>& hol
       ++touching;
       clean_cut = clean_cut && count == static_cast<long>(l.size()) && simple_loop(l);
     }
-    index.reset();  // the soup changed (or is restored below): index it again when needed
+    // Snapping two ends of a short edge onto the plane can leave a face without area.
+    for (const auto& t : soup.faces) {
+      const auto on = [&](int v) { return std::binary_search(plane.begin(), plane.end(), v); };
+      if (!on(t[0]) && !on(t[1]) && !on(t[2])) continue;
+      const Eigen::Vector3d &a = soup.vertices[t[0]], &b = soup.vertices[t[1]], &c = soup.vertices[t[2]];
+      if (!((b - a).cross(c - a).norm() > 1e-12 * (b - a).squaredNorm())) clean_cut = false;
+    }
     if (touching == 0 || !clean_cut) {
-      soup = before;
+      soup = before;  // (the index still describes it)
       continue;
     }
+    index.reset();  // the soup changed: index it again when needed
     holes = std::move(found);
     if (stats) *stats = found_stats;
     caps.push_back(std::move(plane));
     out.push_back(trim);
     h = static_cast<std::size_t>(-1);  // the list was rebuilt: go over it again (tested ones are skipped)
   }
-  // Map each cap to its holes in the final list (its rim: the longest).
+  // Map each cap to its holes in the final list (its rim: the longest; none when a later cut
+  // took it, which the acceptance test makes unlikely).
   for (std::size_t c = 0; c < caps.size(); ++c) {
+    out[c].hole = EndCapTrim::kNone;
     std::size_t longest = 0;
     for (std::size_t k = 0; k < holes.size(); ++k)
       if (std::binary_search(caps[c].begin(), caps[c].end(), holes[k].loop.front())) {

@@ -89,6 +89,38 @@ TEST(EndCap, JaggedBottomOfAChamferedShaftIsTrimmedToOnePlaneAndFilledFlat) {
   EXPECT_LT(off_plane(s, fill_vertices), 1e-9);
 }
 
+TEST(EndCap, ANonFiniteVertexInTheBandLeavesTheSoupAsItWas) {
+  // A NaN corner next to the rim: no cut goes through it, and nothing is changed. A NaN far
+  // from the rim does not stop the trim.
+  TriangleSoup s = trimmed_shaft();
+  std::vector<Hole> holes = find_holes(s);
+  ASSERT_EQ(holes.size(), 1u);
+  TriangleSoup far = s;
+  far.vertices[far.faces.back()[1]] = Eigen::Vector3d::Constant(std::nan(""));  // at the top
+  std::vector<Hole> far_holes = holes;
+  EXPECT_EQ(trim_end_caps(far, far_holes, {}).size(), 1u);
+
+  int next_to_rim = -1;  // a vertex of a face at the rim that is not on the rim
+  const auto on_rim = [&](int v) { return std::find(holes[0].loop.begin(), holes[0].loop.end(), v) != holes[0].loop.end(); };
+  for (const auto& t : s.faces) {
+    if (!on_rim(t[0])) continue;
+    for (int v : t) {
+      if (!on_rim(v) && s.vertices[v].z() < s.vertices[t[0]].z() + 0.2) next_to_rim = v;
+    }
+  }
+  ASSERT_GE(next_to_rim, 0);
+  s.vertices[static_cast<std::size_t>(next_to_rim)] = Eigen::Vector3d::Constant(std::nan(""));
+  const TriangleSoup before = s;
+  EXPECT_TRUE(trim_end_caps(s, holes, {}).empty());
+  EXPECT_EQ(s.faces, before.faces);
+  ASSERT_EQ(s.vertices.size(), before.vertices.size());
+  for (std::size_t v = 0; v < s.vertices.size(); ++v) {
+    if (before.vertices[v].allFinite()) {
+      EXPECT_EQ(s.vertices[v], before.vertices[v]);
+    }
+  }
+}
+
 TEST(EndCap, WithoutTheRuleTheSameHoleBulges) {
   // The test above can fail: with the rule off the hole keeps its jagged rim and RBF domes it.
   TriangleSoup s = trimmed_shaft();

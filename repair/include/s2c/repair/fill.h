@@ -87,14 +87,17 @@ std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& 
 /// 5–25 % of the hole's radius (a chamfer, a cylinder wall: their continuation is the end face;
 /// a sphere's pole turns and is left to RBF). Its rim is jagged where the reconstruction was
 /// trimmed; the band of mesh between the rim's lowest and highest vertices is cut off by the
-/// plane through the highest one (faces across it are clipped, vertices within a tenth of an
+/// plane through the highest one (faces across it are clipped, vertices within 1 % of an
 /// edge snapped onto it), so that the new rim lies in one plane and the fill meets the walls
 /// in a clean crease. The holes are found again afterwards; those of the trimmed caps get
 /// Hole::end_cap (fill_holes fills them flat). When the new boundary is not one simple loop in
 /// the plane the soup is left as it was. Faces and vertices are only removed near the caps;
-/// trimmed-off vertices stay in the soup, unreferenced. Returns how many caps were trimmed.
+/// trimmed-off vertices stay in the soup, unreferenced. Holes above `max_hole_vertices` are not
+/// touched. Faces must refer to existing vertices (as find_holes requires). One entry per
+/// trimmed cap.
 struct EndCapTrim {
-  std::size_t hole = 0;          ///< its index in the holes found again
+  static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+  std::size_t hole = kNone;      ///< its rim's index in the holes found again (kNone: none left)
   double depth_mm = 0;           ///< distance from the rim's lowest vertex to the cut plane
   std::size_t faces_removed = 0, faces_clipped = 0, vertices_snapped = 0;
 };
