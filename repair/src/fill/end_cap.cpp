@@ -39,7 +39,7 @@ bool straight_walls(const TriangleSoup& soup, const MeshIndex& index, const std:
   // Distance to the rim, looked up in a grid of rim vertices with cells of size `hi` (only
   // distances up to `hi` matter): a few cells instead of the whole rim per vertex.
   const auto cell_of = [&](const Eigen::Vector3d& p) {
-    return Eigen::Vector3i((p / hi).array().floor().cast<int>());
+    return Eigen::Vector3i((p / hi).array().floor().max(-1e9).min(1e9).cast<int>());  // (no overflowing cast)
   };
   const auto key = [](const Eigen::Vector3i& c) {
     return (std::uint64_t(std::uint32_t(c.x()) & 0x1fffff) << 42) | (std::uint64_t(std::uint32_t(c.y()) & 0x1fffff) << 21) |
