@@ -28,9 +28,9 @@ using Clock = std::chrono::steady_clock;
 /// Relative noise (measure_noise / median edge) below which a mesh counts as a clean
 /// tessellation: raw face normals are then trusted as they are (no filtering, plain flood fill).
 /// Measured: CAD exports 0 – 5.4e-4 (real/cad, the fixture parts' OpenSCAD meshes), Poisson
-/// meshes of the fixture scans 0.011 – 0.016, noise-sweep meshes ≥ 0.1; the threshold sits
-/// between the two groups with a margin of about 4 each way (it was 0.01, which a scan with a
-/// flat-filled end face fell below).
+/// meshes of the fixture scans 0.011 – 0.016, noise-sweep meshes at σ = 0.1h 0.094 – 0.10. The
+/// threshold sits between CAD and scans with a margin of about 4 each way (it was 0.01, which a
+/// scan with a flat-filled end face fell below).
 constexpr double kCleanNoise = 0.003;
 
 /// On noisy meshes, patches below this share of the surface area take no part in constraints.
