@@ -7,8 +7,10 @@
 #include <unordered_set>
 
 #include "fill/patch.h"
+#include "fill/rim_surfaces.h"
 #include "s2c/core/disjoint_sets.h"
 #include "s2c/repair/fill.h"
+#include "soup_topology.h"
 
 namespace s2c::repair {
 namespace {
@@ -60,6 +62,8 @@ bool straight_walls(const TriangleSoup& soup, const MeshIndex& index, const std:
         }
     return std::sqrt(best);
   };
+  const std::unordered_map<int, Eigen::Vector3d> unmoved;
+  const fill::Position at{soup.vertices, unmoved};
   std::unordered_set<int> seen(loop.begin(), loop.end());
   std::vector<int> frontier(loop), next;
   double n = 0, sd = 0, st = 0, sdd = 0, sdt = 0;  // sums for the line θ(d)
@@ -73,13 +77,9 @@ bool straight_walls(const TriangleSoup& soup, const MeshIndex& index, const std:
           if (!(d <= hi)) continue;
           next.push_back(u);
           if (d < lo) continue;
-          Eigen::Vector3d normal = Eigen::Vector3d::Zero();
-          index.for_each_face_of(u, [&](int g) {
-            const auto& t = soup.faces[static_cast<std::size_t>(g)];
-            normal += (soup.vertices[t[1]] - soup.vertices[t[0]]).cross(soup.vertices[t[2]] - soup.vertices[t[0]]);
-          });
-          if (!(normal.norm() > 0)) continue;
-          const double theta = std::acos(std::min(1.0, std::abs(normal.normalized().dot(s.normal))));
+          const Eigen::Vector3d normal = fill::area_normal(soup, index, u, at);
+          if (normal.squaredNorm() == 0) continue;
+          const double theta = std::acos(std::min(1.0, std::abs(normal.dot(s.normal))));
           n += 1, sd += d, st += theta, sdd += d * d, sdt += d * theta;
         }
       });
@@ -135,15 +135,9 @@ std::optional<Cut> end_cap_cut(const TriangleSoup& soup, const MeshIndex& index,
 // band's height is removed.
 void remove_debris(TriangleSoup& soup, const std::vector<int>& on_plane, const Cut& cut, EndCapTrim& trim) {
   const std::size_t nf = soup.faces.size();
-  std::vector<std::pair<std::uint64_t, int>> by_edge;
-  by_edge.reserve(3 * nf);
-  for (std::size_t f = 0; f < nf; ++f)
-    for (int i = 0; i < 3; ++i)
-      by_edge.emplace_back(undirected_edge_key(soup.faces[f][i], soup.faces[f][(i + 1) % 3]), static_cast<int>(f));
-  std::sort(by_edge.begin(), by_edge.end());
   DisjointSets pieces(nf);
-  for (std::size_t i = 1; i < by_edge.size(); ++i)
-    if (by_edge[i].first == by_edge[i - 1].first) pieces.unite(by_edge[i].second, by_edge[i - 1].second);
+  for (const auto& [key, faces] : EdgeFaces(soup))
+    for (std::size_t i = 1; i < faces.size(); ++i) pieces.unite(faces[i], faces[0]);
   std::vector<double> top(nf, -std::numeric_limits<double>::infinity());
   std::vector<char> touches(nf, 0);
   for (std::size_t f = 0; f < nf; ++f) {

@@ -11,7 +11,8 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// Unit area-weighted normal of vertex v from its faces at positions `at`, zero when degenerate.
+}  // namespace
+
 Eigen::Vector3d area_normal(const TriangleSoup& soup, const MeshIndex& index, int v, const Position& at) {
   Eigen::Vector3d n = Eigen::Vector3d::Zero();
   index.for_each_face_of(v, [&](int f) {
@@ -20,8 +21,6 @@ Eigen::Vector3d area_normal(const TriangleSoup& soup, const MeshIndex& index, in
   });
   return n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero();
 }
-
-}  // namespace
 
 double surface_noise(const TriangleSoup& soup, const MeshIndex& index, const std::vector<int>& vertices,
                      const Position& at, const std::vector<int>& skip) {

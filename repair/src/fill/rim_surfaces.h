@@ -25,6 +25,9 @@ struct Position {
   }
 };
 
+/// Unit area-weighted normal of vertex v from its faces at positions `at`, zero when degenerate.
+Eigen::Vector3d area_normal(const TriangleSoup& soup, const MeshIndex& index, int v, const Position& at);
+
 /// Noise of the surface around a hole, mm: the median over `vertices` (sorted; rings ≥ 1, each with its
 /// mesh neighbours) of how much the normal component of the umbrella vector L(v) = mean(N(v)) - v
 /// differs from its mean over the neighbours. On a smooth surface L·n follows the curvature and
