@@ -196,6 +196,30 @@ int orient2d_expansion(const V2& a, const V2& b, const V2& c) {
 
 // ---- small exact helpers ---------------------------------------------------------------
 
+// orient3d's sign when its floating-point filter settles it (with the exact zero of four points
+// sharing a coordinate), else kUnsettled: lets a caller try cheaper exact tests before the
+// expansion arithmetic.
+constexpr int kUnsettled = 2;
+int orient3d_filtered(const V3& a, const V3& b, const V3& c, const V3& d) {
+  const double bx = b.x() - a.x(), by = b.y() - a.y(), bz = b.z() - a.z();
+  const double cx = c.x() - a.x(), cy = c.y() - a.y(), cz = c.z() - a.z();
+  const double dx = d.x() - a.x(), dy = d.y() - a.y(), dz = d.z() - a.z();
+  const double det = bx * (cy * dz - cz * dy) + by * (cz * dx - cx * dz) + bz * (cx * dy - cy * dx);
+  const double mx = std::max({std::abs(bx), std::abs(cx), std::abs(dx)});
+  const double my = std::max({std::abs(by), std::abs(cy), std::abs(dy)});
+  const double mz = std::max({std::abs(bz), std::abs(cz), std::abs(dz)});
+  const double lo = std::min({mx, my, mz}), hi = std::max({mx, my, mz});
+  // A difference of doubles is zero only if the operands are equal (subtraction is exact
+  // near zero), so all four points then share one coordinate and are coplanar.
+  if (lo == 0) return 0;
+  if (lo >= kOrient3dMin && hi <= kOrient3dMax) {
+    const double eps = kOrient3dBound * mx * my * mz;
+    if (det > eps) return 1;
+    if (det < -eps) return -1;
+  }
+  return kUnsettled;
+}
+
 // Lexicographic order on (x, y, z). On any line it is monotone along the line, so it orders
 // collinear points exactly without constructing anything.
 bool lex_less(const V3& a, const V3& b) {
@@ -446,10 +470,15 @@ bool projections_apart(const Tri& t, const Tri& u) {
 // Faces (v, a, b) and (v, c, d) sharing vertex v: do they share a point other than v?
 bool share_beyond_vertex(const V3& v, const V3& a, const V3& b, const V3& c, const V3& d) {
   // One face strictly on one side of the other's plane (except v): it meets that plane only at
-  // v. Two orient3d, nearly always settled by their floating-point filter: the common case of
-  // neighbouring faces on a curved surface, before the projections below.
-  if (orient3d(v, c, d, a) * orient3d(v, c, d, b) > 0 || orient3d(v, a, b, c) * orient3d(v, a, b, d) > 0) return false;
+  // v. On a curved surface the floating-point filter settles these signs; on a flat region
+  // (nearly) coplanar neighbours leave them to the exact expansion, so the 2D sector test comes
+  // before that. Each test alone proves the faces apart: the order changes no answer.
+  const auto same_side = [](int s, int t) { return s != kUnsettled && t != kUnsettled && s * t > 0; };
+  if (same_side(orient3d_filtered(v, c, d, a), orient3d_filtered(v, c, d, b)) ||
+      same_side(orient3d_filtered(v, a, b, c), orient3d_filtered(v, a, b, d)))
+    return false;
   if (sectors_apart(v, a, b, c, d)) return false;
+  if (orient3d(v, c, d, a) * orient3d(v, c, d, b) > 0 || orient3d(v, a, b, c) * orient3d(v, a, b, d) > 0) return false;
   const bool flat1 = collinear(v, a, b), flat2 = collinear(v, c, d);
   if (!flat1 && !flat2) {
     // As CGAL: some point other than v is shared iff an opposite edge touches the other face.
@@ -507,22 +536,8 @@ bool share_beyond_edge(const V3& a, const V3& b, const V3& c, const V3& d) {
 }  // namespace
 
 int orient3d(const V3& a, const V3& b, const V3& c, const V3& d) {
-  const double bx = b.x() - a.x(), by = b.y() - a.y(), bz = b.z() - a.z();
-  const double cx = c.x() - a.x(), cy = c.y() - a.y(), cz = c.z() - a.z();
-  const double dx = d.x() - a.x(), dy = d.y() - a.y(), dz = d.z() - a.z();
-  const double det = bx * (cy * dz - cz * dy) + by * (cz * dx - cx * dz) + bz * (cx * dy - cy * dx);
-  const double mx = std::max({std::abs(bx), std::abs(cx), std::abs(dx)});
-  const double my = std::max({std::abs(by), std::abs(cy), std::abs(dy)});
-  const double mz = std::max({std::abs(bz), std::abs(cz), std::abs(dz)});
-  const double lo = std::min({mx, my, mz}), hi = std::max({mx, my, mz});
-  // A difference of doubles is zero only if the operands are equal (subtraction is exact
-  // near zero), so all four points then share one coordinate and are coplanar.
-  if (lo == 0) return 0;
-  if (lo >= kOrient3dMin && hi <= kOrient3dMax) {
-    const double eps = kOrient3dBound * mx * my * mz;
-    if (det > eps) return 1;
-    if (det < -eps) return -1;
-  }
+  const int sign = orient3d_filtered(a, b, c, d);
+  if (sign != kUnsettled) return sign;
   if (orient3d_expansion_ok(a, b, c, d)) return orient3d_expansion(a, b, c, d);
   return orient3d_gmp(a, b, c, d);
 }

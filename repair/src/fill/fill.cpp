@@ -521,7 +521,7 @@ std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& 
     });
   };
   const auto plan_unchecked = [&](std::size_t h) { plans[h] = plan_hole(soup, index, holes[h], options, false); };
-  tbb::parallel_invoke([&] { index.prepare_boxes(); }, [&] { over_simple(plan_unchecked); });
+  tbb::parallel_invoke([&] { if (simple.size() > 2) index.prepare_boxes(); }, [&] { over_simple(plan_unchecked); });
   over_simple([&](std::size_t h) {
     validate(soup, index, plans[h]);
     planned[h] = 1;

@@ -360,17 +360,26 @@ bool fair(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, bool t
   const int n = patch.rim_size();
   const int unknowns = patch.size() - n;
   if (unknowns == 0) return true;
-  // Neighbours by soup index (a repeated rim vertex is one node with the union of its fans).
-  std::unordered_map<int, std::vector<int>> nbrs;
+  // Flat sorted arrays rather than hash maps (this runs for every hole). Nodes by soup index (a
+  // repeated rim vertex is one node with the union of its fans): (node, neighbour) pairs.
+  std::vector<std::pair<int, int>> links;
+  links.reserve(6 * patch.faces.size());
   for (const auto& t : patch.faces)
-    for (int k = 0; k < 3; ++k)
-      for (int o : {t[(k + 1) % 3], t[(k + 2) % 3]}) nbrs[patch.global(t[k])].push_back(patch.global(o));
-  if (!tangent_continuous) {
-    for (int g : patch.rim) nbrs.erase(g);  // rows for the new vertices only
-  } else {
-    for (int g : patch.rim)
-      for (int u : index.neighbours(g)) nbrs[g].push_back(u);
+    for (int k = 0; k < 3; ++k) {
+      const int g = patch.global(t[k]);
+      if (!tangent_continuous && g < patch.base) continue;  // rows for the new vertices only
+      for (int o : {t[(k + 1) % 3], t[(k + 2) % 3]}) links.emplace_back(g, patch.global(o));
+    }
+  if (tangent_continuous) {
+    std::vector<int> around;
+    for (int g : patch.rim) {
+      around.clear();
+      index.append_neighbours(g, around);
+      for (int u : around) links.emplace_back(g, u);
+    }
   }
+  std::sort(links.begin(), links.end());
+  links.erase(std::unique(links.begin(), links.end()), links.end());
   const auto position = [&](int g) -> const Eigen::Vector3d& {
     return g >= patch.base ? patch.points[static_cast<std::size_t>(g - patch.base + n)] : soup.vertices[g];
   };
@@ -378,59 +387,76 @@ bool fair(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, bool t
   // faces and, for the rim nodes of the C1 join, the mesh faces around them; taken on the
   // refined patch before fairing. A weight is clamped to a small positive floor: obtuse
   // triangles give negative cotangents that would let the solve fold the patch.
-  std::unordered_map<std::uint64_t, double> cot;
+  std::vector<std::pair<std::uint64_t, double>> cot;  // (edge, half cotangent), summed below
   const auto add_triangle = [&](int a, int b, int c) {
     const std::array<int, 3> t{a, b, c};
     for (int k = 0; k < 3; ++k) {
       const int o = t[k], u = t[(k + 1) % 3], w = t[(k + 2) % 3];
       const Eigen::Vector3d e1 = position(u) - position(o), e2 = position(w) - position(o);
       const double sn = e1.cross(e2).norm();
-      if (sn > 0) cot[edge_key(u, w)] += 0.5 * e1.dot(e2) / sn;
+      if (sn > 0) cot.emplace_back(edge_key(u, w), 0.5 * e1.dot(e2) / sn);
     }
   };
-  {
-    std::unordered_set<std::uint64_t> mesh_faces_done;
-    for (const auto& t : patch.faces) add_triangle(patch.global(t[0]), patch.global(t[1]), patch.global(t[2]));
-    if (tangent_continuous)
-      for (int g : patch.rim)
-        for (int f : index.faces_of(g))
-          if (mesh_faces_done.insert(static_cast<std::uint64_t>(f)).second)
-            add_triangle(soup.faces[f][0], soup.faces[f][1], soup.faces[f][2]);
+  for (const auto& t : patch.faces) add_triangle(patch.global(t[0]), patch.global(t[1]), patch.global(t[2]));
+  if (tangent_continuous) {
+    std::vector<int> mesh_faces;
+    for (int g : patch.rim) index.for_each_face_of(g, [&](int f) { mesh_faces.push_back(f); });
+    std::sort(mesh_faces.begin(), mesh_faces.end());
+    mesh_faces.erase(std::unique(mesh_faces.begin(), mesh_faces.end()), mesh_faces.end());
+    for (int f : mesh_faces) add_triangle(soup.faces[f][0], soup.faces[f][1], soup.faces[f][2]);
   }
+  // Per edge the sum in the order the faces were added (stable sort).
+  std::stable_sort(cot.begin(), cot.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  std::size_t edges = 0;
+  for (std::size_t i = 0; i < cot.size();) {
+    std::size_t j = i + 1;
+    double sum = cot[i].second;
+    for (; j < cot.size() && cot[j].first == cot[i].first; ++j) sum += cot[j].second;
+    cot[edges++] = {cot[i].first, sum};
+    i = j;
+  }
+  cot.resize(edges);
+  const auto cot_of = [&](int a, int b) {
+    const std::uint64_t key = edge_key(a, b);
+    const auto it = std::lower_bound(cot.begin(), cot.end(), key, [](const auto& e, std::uint64_t k) { return e.first < k; });
+    return it != cot.end() && it->first == key ? it->second : 0.0;
+  };
   constexpr double kMinCot = 0.05;
   std::vector<Eigen::Triplet<double>> trip;
   std::vector<Eigen::Vector3d> rhs;
   int row = 0;
   std::vector<double> weights;
-  std::unordered_map<int, int> row_of;  // node → its row of A
+  std::vector<std::pair<int, int>> row_of;  // (node, its row of A), ascending by node
   struct Term {
     int center, other;
     double w;
   };
   std::vector<Term> umbrella;
-  for (auto& [center, list] : nbrs) {
-    std::sort(list.begin(), list.end());
-    list.erase(std::unique(list.begin(), list.end()), list.end());
+  for (std::size_t next = 0; next < links.size();) {
+    const std::size_t first = next;
+    const int center = links[first].first;
+    while (next < links.size() && links[next].first == center) ++next;
+    const auto list = [&](std::size_t k) { return links[first + k].second; };
+    const std::size_t size = next - first;
     Eigen::Vector3d b = Eigen::Vector3d::Zero();
-    weights.assign(list.size(), 0);
+    weights.assign(size, 0);
     double total = 0;
-    for (std::size_t k = 0; k < list.size(); ++k) {
-      const auto it = cot.find(edge_key(center, list[k]));
-      weights[k] = std::max(it == cot.end() ? 0.0 : it->second, kMinCot);
+    for (std::size_t k = 0; k < size; ++k) {
+      weights[k] = std::max(cot_of(center, list(k)), kMinCot);
       total += weights[k];
     }
     bool has_unknown = center >= patch.base;
-    for (int u : list) has_unknown |= u >= patch.base;
+    for (std::size_t k = 0; k < size; ++k) has_unknown |= list(k) >= patch.base;
     if (!has_unknown) continue;  // a rim node with no new neighbour: constant row, no information
     const auto add = [&](int g, double c) {
       if (g >= patch.base) trip.emplace_back(row, g - patch.base, c);
       else b += c * position(g);
     };
     add(center, -1.0);
-    for (std::size_t k = 0; k < list.size(); ++k) add(list[k], weights[k] / total);
+    for (std::size_t k = 0; k < size; ++k) add(list(k), weights[k] / total);
     rhs.push_back(b);
-    row_of[center] = row;
-    for (std::size_t k = 0; k < list.size(); ++k) umbrella.push_back({center, list[k], weights[k] / total});
+    row_of.emplace_back(center, row);
+    for (std::size_t k = 0; k < size; ++k) umbrella.push_back({center, list(k), weights[k] / total});
     ++row;
   }
   Eigen::SparseMatrix<double> A(row, unknowns);
@@ -446,8 +472,8 @@ bool fair(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, bool t
       if (center >= patch.base) wt.emplace_back(center - patch.base, r, -1.0);
     for (const Term& t : umbrella) {
       if (t.center < patch.base) continue;
-      const auto it = row_of.find(t.other);
-      if (it != row_of.end()) wt.emplace_back(t.center - patch.base, it->second, t.w);
+      const auto it = std::lower_bound(row_of.begin(), row_of.end(), std::pair{t.other, -1});
+      if (it != row_of.end() && it->first == t.other) wt.emplace_back(t.center - patch.base, it->second, t.w);
     }
     Eigen::SparseMatrix<double> W(unknowns, row);
     W.setFromTriplets(wt.begin(), wt.end());

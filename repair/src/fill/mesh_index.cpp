@@ -1,7 +1,9 @@
 // Adjacency of the soup for hole filling (see patch.h).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 
 #include <tbb/blocked_range.h>
@@ -44,16 +46,27 @@ FaceBox face_box(const TriangleSoup& soup, std::size_t f) {
 }  // namespace
 
 MeshIndex::MeshIndex(const TriangleSoup& soup) : soup_(soup) {
-  vf_offset_.assign(soup.vertices.size() + 1, 0);
-  for (std::size_t f = 0; f < soup.faces.size(); ++f)
-    if (valid_face(soup, f))
-      for (int c : soup.faces[f]) ++vf_offset_[static_cast<std::size_t>(c) + 1];
+  // Counting sort of the (vertex, face) incidences; raw pointers in the two O(#F) passes (every
+  // fill_holes call pays them).
+  const std::size_t nf = soup.faces.size();
+  const auto nv = static_cast<unsigned>(soup.vertices.size());
+  const std::array<int, 3>* faces = soup.faces.data();
+  const auto valid = [nv](const std::array<int, 3>& t) {
+    return static_cast<unsigned>(t[0]) < nv && static_cast<unsigned>(t[1]) < nv && static_cast<unsigned>(t[2]) < nv;
+  };
+  vf_offset_.assign(std::size_t{nv} + 1, 0);
+  int* count = vf_offset_.data() + 1;
+  for (std::size_t f = 0; f < nf; ++f)
+    if (valid(faces[f]))
+      for (int c : faces[f]) ++count[c];
   for (std::size_t v = 1; v < vf_offset_.size(); ++v) vf_offset_[v] += vf_offset_[v - 1];
   vf_faces_.resize(static_cast<std::size_t>(vf_offset_.back()));
-  std::vector<int> fill(vf_offset_.begin(), vf_offset_.end() - 1);
-  for (std::size_t f = 0; f < soup.faces.size(); ++f)
-    if (valid_face(soup, f))
-      for (int c : soup.faces[f]) vf_faces_[static_cast<std::size_t>(fill[static_cast<std::size_t>(c)]++)] = static_cast<int>(f);
+  std::vector<int> next(vf_offset_.begin(), vf_offset_.end() - 1);
+  int* out = vf_faces_.data();
+  int* at = next.data();
+  for (std::size_t f = 0; f < nf; ++f)
+    if (valid(faces[f]))
+      for (int c : faces[f]) out[at[c]++] = static_cast<int>(f);
 }
 
 void MeshIndex::extend_boxes() const {
@@ -92,6 +105,10 @@ void MeshIndex::extend_boxes() const {
 
 void MeshIndex::faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, std::vector<int>& out,
                            std::size_t first) const {
+  if (!use_blocks_) {
+    scan_near(lo, hi, out, first);
+    return;
+  }
   if (boxed_ < soup_.faces.size()) extend_boxes();
   const Eigen::Vector3f l = down(lo), h = up(hi);
   // "Not apart" rather than "overlapping", so that NaN boxes are always kept.
@@ -107,6 +124,43 @@ void MeshIndex::faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
       if (!b.finite || !((b.hi.array() < lo.array()).any() || (b.lo.array() > hi.array()).any()))
         out.push_back(static_cast<int>(f));
     }
+  }
+}
+
+void MeshIndex::scan_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, std::vector<int>& out,
+                          std::size_t first) const {
+  const TriangleSoup& soup = soup_;
+  const std::size_t faces = soup.faces.size(), vertices = soup.vertices.size();
+  if (first >= faces) return;
+  // A few faces (appended since `first`): their boxes directly.
+  if (3 * (faces - first) < vertices) {
+    for (std::size_t f = first; f < faces; ++f) {
+      if (!valid_face(soup, f)) continue;
+      const FaceBox b = face_box(soup, f);
+      if (!b.finite || !((b.hi.array() < lo.array()).any() || (b.lo.array() > hi.array()).any()))
+        out.push_back(static_cast<int>(f));
+    }
+    return;
+  }
+  // Outcode bit 2a: below lo on axis a, bit 2a+1: above hi. A non-finite corner gets none, so
+  // its faces are always kept.
+  thread_local std::vector<std::uint8_t> code;
+  code.resize(vertices);
+  const Eigen::Vector3d* point = soup.vertices.data();
+  const double lx = lo.x(), ly = lo.y(), lz = lo.z(), hx = hi.x(), hy = hi.y(), hz = hi.z();
+  std::uint8_t* c = code.data();
+  for (std::size_t v = 0; v < vertices; ++v) {
+    const double x = point[v].x(), y = point[v].y(), z = point[v].z();
+    const bool finite = std::isfinite(x + y + z);  // NaN or ±inf in any coordinate
+    c[v] = static_cast<std::uint8_t>(finite * ((x < lx) | (x > hx) << 1 | (y < ly) << 2 | (y > hy) << 3 |
+                                               (z < lz) << 4 | (z > hz) << 5));
+  }
+  const auto nv = static_cast<unsigned>(vertices);
+  const std::array<int, 3>* face = soup.faces.data();
+  for (std::size_t f = first; f < faces; ++f) {
+    const auto a = static_cast<unsigned>(face[f][0]), b = static_cast<unsigned>(face[f][1]),
+               d = static_cast<unsigned>(face[f][2]);
+    if (a < nv && b < nv && d < nv && (c[a] & c[b] & c[d]) == 0) out.push_back(static_cast<int>(f));
   }
 }
 

@@ -41,6 +41,7 @@ class MeshIndex {
   void for_each_face_of(int v, Visit&& visit) const {
     if (v >= 0 && static_cast<std::size_t>(v) + 1 < vf_offset_.size())
       for (int i = vf_offset_[v]; i < vf_offset_[v + 1]; ++i) visit(vf_faces_[static_cast<std::size_t>(i)]);
+    if (added_vertex_faces_.empty()) return;  // (no hashing while holes are planned)
     const auto it = added_vertex_faces_.find(v);
     if (it != added_vertex_faces_.end())
       for (int f : it->second) visit(f);
@@ -55,21 +56,30 @@ class MeshIndex {
   /// The same appended to `out` (no allocation when `out` has room).
   void append_neighbours(int v, std::vector<int>& out) const;
   /// Faces whose bounding box overlaps the box [lo, hi] (and faces with non-finite corners),
-  /// ascending; appended to `out`. Boxes of blocks of kBlock consecutive faces are built on the
-  /// first call (O(#F), no sort: it is paid by every call that fills a hole) and extended as
-  /// patches are added; a query skips the blocks whose box misses [lo, hi] and tests the faces
-  /// of the others one by one.
-  /// Meshes list neighbouring faces close together (grids, subdivisions, marching cubes, PLY
-  /// exports), so a query opens few blocks; on a shuffled mesh it degrades to a linear scan.
-  /// Only faces from index `first` on are considered (those appended since some point).
+  /// ascending; appended to `out`. Only faces from index `first` on are considered (those
+  /// appended since some point). Safe to call from several threads at once as long as no faces
+  /// are added meanwhile.
+  /// Two ways, the same answer up to float rounding (a few extra faces, never one less):
+  /// - by default one pass over the vertices (their outcodes against the box, as in
+  ///   Cohen–Sutherland clipping: a face's box misses [lo, hi] exactly when its three corners
+  ///   lie beyond the same side) and one over the faces, O(#V + #F) per query with no set-up:
+  ///   best for a call that fills one or two holes;
+  /// - after prepare_boxes(), by boxes of blocks of kBlock consecutive faces (built once in
+  ///   O(#F), extended as patches are added): a query skips the blocks whose box misses [lo, hi]
+  ///   and tests the faces of the others one by one. Meshes list neighbouring faces close together
+  ///   (grids, subdivisions, marching cubes, PLY exports), so a query opens few blocks; on a
+  ///   shuffled mesh it degrades to a linear scan.
   void faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, std::vector<int>& out,
                   std::size_t first = 0) const;
-  /// Builds the boxes of every block now: faces_near may then be called from several threads
-  /// at once as long as no faces are added meanwhile.
-  void prepare_boxes() const { extend_boxes(); }
+  /// Switches faces_near to the block boxes and builds them now (for calls with many holes).
+  void prepare_boxes() const {
+    use_blocks_ = true;
+    extend_boxes();
+  }
 
  private:
   void extend_boxes() const;  // boxes for the faces not boxed yet (appended ones included)
+  void scan_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, std::vector<int>& out, std::size_t first) const;
   const TriangleSoup& soup_;
   std::vector<int> vf_offset_, vf_faces_;                // the input's vertex → faces (CSR)
   std::unordered_map<int, std::vector<int>> added_vertex_faces_;
@@ -79,6 +89,7 @@ class MeshIndex {
   };
   mutable std::vector<Box> block_boxes_;
   mutable std::size_t boxed_ = 0;  // faces [0, boxed_) are in block_boxes_
+  mutable bool use_blocks_ = false;
 };
 
 /// A patch under construction. Local vertex l < rim.size() is loop position l (soup vertex

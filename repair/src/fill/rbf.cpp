@@ -83,9 +83,9 @@ bool CubicRbf::fit(const std::vector<Eigen::Vector3d>& centers, const std::vecto
   const Eigen::ArrayXd &X = cx_, &Y = cy_, &Z = cz_;
   const auto column = [&](int j) {
     const int m = n - j;
-    const Eigen::ArrayXd r =
-        ((X.tail(m) - X[j]).square() + (Y.tail(m) - Y[j]).square() + (Z.tail(m) - Z[j]).square()).sqrt();
-    phi.col(j).tail(m) = (r * r * r).matrix();
+    auto out = phi.col(j).tail(m).array();  // r computed in place: no temporary per column
+    out = ((X.tail(m) - X[j]).square() + (Y.tail(m) - Y[j]).square() + (Z.tail(m) - Z[j]).square()).sqrt();
+    out = out.cube();
   };
   if (n < 512) {
     for (int j = 0; j < n; ++j) column(j);
@@ -131,10 +131,19 @@ bool CubicRbf::fit(const std::vector<Eigen::Vector3d>& centers, const std::vecto
     if (i > 0)
       T.col(i).head(i) = -tau * (T.topLeftCorner(i, i) * (V.leftCols(i).transpose() * V.col(i)));  // T is upper
   }
-  const Eigen::MatrixXd W = phi.selfadjointView<Eigen::Lower>() * V;
+  // W = Φ V and the update by BLAS (dsymm, dsyr2k): OpenBLAS's kernels are picked at run time
+  // (AVX2 / AVX-512), Eigen's are SSE2 here.
+  single_threaded_blas();
+  Eigen::MatrixXd W(n, 4);
+  {
+    char left = 'L', lower = 'L';
+    blasint nn = n, k = 4, ld = n;
+    double one = 1, zero = 0;
+    BLASFUNC(dsymm)(&left, &lower, &nn, &k, &one, phi.data(), &ld, const_cast<double*>(V.data()), &ld, &zero,
+                    W.data(), &ld);
+  }
   Eigen::MatrixXd U = W * T - 0.5 * V * (T.transpose() * (V.transpose() * W) * T);
   {
-    single_threaded_blas();
     char lower = 'L', plain = 'N';
     blasint nn = n, k = 4, ld = n;
     double minus_one = -1, one = 1;
@@ -225,6 +234,8 @@ bool fit_samples(CubicRbf& rbf, const std::vector<Eigen::Vector3d>& points, cons
                  const std::vector<int>& which, double offset) {
   std::vector<Eigen::Vector3d> c;
   std::vector<double> v;
+  c.reserve(2 * which.size());
+  v.reserve(2 * which.size());
   for (int i : which) {
     c.push_back(points[i]);
     v.push_back(0);
@@ -471,13 +482,42 @@ bool project(const PieceSurfaces& combined, const HoleShape& shape, const FillOp
   return true;
 }
 
+// The ring of every vertex reached by the search around a hole: a sorted list, since a hole's
+// rings hold a few hundred vertices (binary searches and one merge per ring instead of a hash
+// map's allocation per vertex).
+class Rings {
+ public:
+  /// Gives ring r to the vertices of `candidates` not reached yet; returns them, ascending.
+  std::vector<int> add(std::vector<int> candidates, int r) {
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    std::vector<int> fresh;
+    for (int v : candidates)
+      if (of(v) < 0) fresh.push_back(v);
+    const auto middle = static_cast<std::ptrdiff_t>(sorted_.size());
+    for (int v : fresh) sorted_.emplace_back(v, r);
+    std::inplace_merge(sorted_.begin(), sorted_.begin() + middle, sorted_.end());
+    return fresh;
+  }
+  /// v's ring, -1 when not reached.
+  int of(int v) const {
+    const auto it = std::lower_bound(sorted_.begin(), sorted_.end(), std::pair{v, std::numeric_limits<int>::min()});
+    return it != sorted_.end() && it->first == v ? it->second : -1;
+  }
+  /// (vertex, ring), ascending by vertex.
+  const std::vector<std::pair<int, int>>& all() const { return sorted_; }
+
+ private:
+  std::vector<std::pair<int, int>> sorted_;
+};
+
 }  // namespace
 
 bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, const HoleShape& shape,
               const FillOptions& options, RbfStats& stats, std::string& why) {
   // Two independent halves, run side by side: the implicit surface from the mesh around the hole
   // (steps 1–3 and its fit) and the initial patch (step 4). Both only read the soup.
-  std::unordered_map<int, int> ring;  // vertex → ring
+  Rings ring;                         // vertex → ring
   std::vector<int> samples;           // constraint vertices (rings 0..3), sorted
   std::unordered_map<int, Eigen::Vector3d> pos;  // smoothed positions
   const Position at{soup.vertices, pos};
@@ -490,7 +530,7 @@ bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, co
     if (stats.smoothed) return;
     for (SmoothPiece& piece : s.pieces)
       for (std::size_t i = 0; i < piece.vertices.size(); ++i)
-        if (ring.at(piece.vertices[i]) % 2) piece.normals[i].setZero();
+        if (ring.of(piece.vertices[i]) % 2) piece.normals[i].setZero();
   };
   PieceSurfaces combined;
   enum class Fit { later, done, failed } fit = Fit::later;
@@ -498,9 +538,7 @@ bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, co
   const auto surface_side = [&] {
     // 1. Rings around the hole by breadth-first search over mesh edges (ring 0 = the rim), as far
     //    as the constraints need; on to the smoothing rings only if the surface is smoothed.
-    std::vector<int> frontier;
-    for (int g : patch.rim)
-      if (ring.emplace(g, 0).second) frontier.push_back(g);
+    std::vector<int> frontier = ring.add(patch.rim, 0);
     int reached = 0;
     // A ring is also a distance: the search goes on only from vertices within kRingReach · r rim
     // edges of the rim. On even meshes that stops nothing; through a fan's centre (a cylinder's
@@ -516,25 +554,25 @@ bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, co
       return false;
     };
     const auto grow_to = [&](int rings) {
+      std::vector<int> reachable;
       for (; reached < rings && !frontier.empty(); ++reached) {
-        std::vector<int> next;
+        reachable.clear();
         for (int v : frontier)  // (the ring a vertex gets does not depend on the visiting order)
           index.for_each_face_of(v, [&](int f) {
-            for (int u : soup.faces[static_cast<std::size_t>(f)])
-              if (ring.emplace(u, reached + 1).second && near_rim(u, reached + 1)) next.push_back(u);
+            for (int u : soup.faces[static_cast<std::size_t>(f)]) reachable.push_back(u);
           });
-        frontier.swap(next);
+        frontier.clear();
+        for (int u : ring.add(reachable, reached + 1))
+          if (near_rim(u, reached + 1)) frontier.push_back(u);
       }
     };
     grow_to(std::max(options.rbf_constraint_rings, 0));
     std::vector<int> inner;  // constraint vertices off the rim
-    for (const auto& [v, r] : ring)
+    for (const auto& [v, r] : ring.all())  // ascending by vertex
       if (r <= options.rbf_constraint_rings) {
         samples.push_back(v);
         if (r >= 1) inner.push_back(v);
       }
-    std::sort(samples.begin(), samples.end());
-    std::sort(inner.begin(), inner.end());
     // 2. Laplacian smoothing (eq. 4, uniform weights) of rings 1..5 on a copy, when the surface
     //    there is noisy (on clean input it would only move correct vertices); the rim stays
     //    where it is because the patch must meet it exactly. Taubin's μ step after each λ step
@@ -546,11 +584,10 @@ bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, co
     stats.smoothed = options.rbf_smoothing_passes > 0 && stats.noise > options.rbf_noise_threshold * shape.edge;
     if (stats.smoothed) {
       grow_to(std::max(options.rbf_smoothing_rings, 0));
-      for (const auto& [v, r] : ring) pos[v] = soup.vertices[v];
-      std::vector<int> movable;
-      for (const auto& [v, r] : ring)
+      for (const auto& [v, r] : ring.all()) pos[v] = soup.vertices[v];
+      std::vector<int> movable;  // ascending
+      for (const auto& [v, r] : ring.all())
         if (r >= 1 && r <= options.rbf_smoothing_rings) movable.push_back(v);
-      std::sort(movable.begin(), movable.end());
       std::unordered_map<int, std::vector<int>> nbrs;
       for (int v : movable) nbrs[v] = index.neighbours(v);
       for (int pass = 0; pass < options.rbf_smoothing_passes; ++pass)

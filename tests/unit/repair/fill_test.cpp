@@ -710,15 +710,18 @@ TEST(Fill, QuadWhoseDiagonalsAreBothMeshEdgesGetsACentreVertex) {
 }
 
 TEST(Fill, MeshIndexFindsEveryFaceNearABoxIncludingAppendedOnes) {
-  // The validation's broad phase (replaces a scan of all faces per hole): every face whose box
-  // overlaps the query box must be returned, also faces appended after the index was built and
-  // faces with a non-finite corner (always returned), whatever the order of the faces (blocks
-  // of consecutive faces: shuffled, every block spans the sphere).
+  // The validation's broad phase, both ways (the vertex outcode scan, and the block boxes after
+  // prepare_boxes): every face whose box overlaps the query box must be returned, also faces
+  // appended after the index was built and faces with a non-finite corner (always returned),
+  // whatever the order of the faces (blocks of consecutive faces: shuffled, every block spans
+  // the sphere).
   // Levels 5 (20480 faces, one sequential build of the block boxes) and 7 (327680 faces, above
   // 4096 blocks: the parallel build) have one vertex of the input made non-finite (its blocks'
   // boxes are NaN, so they are always opened, and its faces always returned).
+  for (const bool blocks : {false, true})
   for (const auto& [level, shuffled] :
        {std::pair{3, false}, std::pair{3, true}, std::pair{5, true}, std::pair{7, true}}) {
+    SCOPED_TRACE(blocks ? "block boxes" : "outcode scan");
     TriangleSoup s = test::icosphere({0, 0, 0}, 10, level);
     if (shuffled) std::shuffle(s.faces.begin(), s.faces.end(), std::mt19937(3));
     std::vector<int> nan_faces;
@@ -728,8 +731,7 @@ TEST(Fill, MeshIndexFindsEveryFaceNearABoxIncludingAppendedOnes) {
         if (std::count(s.faces[f].begin(), s.faces[f].end(), 7)) nan_faces.push_back(f);
     }
     fill::MeshIndex index(s);
-    std::vector<int> warm;
-    index.faces_near({0, 0, 0}, {1, 1, 1}, warm);  // boxes built before the faces are appended
+    if (blocks) index.prepare_boxes();  // built before the faces are appended, extended after
     const int b = static_cast<int>(s.vertices.size());
     s.vertices.push_back({-30, -30, 0});
     s.vertices.push_back({30, -30, 0});
