@@ -508,8 +508,8 @@ std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& 
     if (by_hole[h].size() == 1 && by_hole[h][0]->note.empty()) simple.push_back(h);
   std::vector<Plan> plans(holes.size());
   std::vector<char> planned(holes.size(), 0);
-  // The index's boxes (for validation) are built while the plans are made, and the plans are
-  // then validated concurrently (a single hole gains most: the boxes cost O(#F)).
+  // The plans are made, then validated, concurrently; for calls with more than kScanHoles holes
+  // the index's block boxes (validation's broad phase, O(#F)) are built while the plans are made.
   const auto over_simple = [&](const auto& work) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, simple.size(), 1), [&](const auto& range) {
       for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -521,7 +521,9 @@ std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& 
     });
   };
   const auto plan_unchecked = [&](std::size_t h) { plans[h] = plan_hole(soup, index, holes[h], options, false); };
-  tbb::parallel_invoke([&] { if (simple.size() > 2) index.prepare_boxes(); }, [&] { over_simple(plan_unchecked); });
+  // Up to two holes each validation scans vertices and faces once; more share block boxes.
+  constexpr std::size_t kScanHoles = 2;
+  tbb::parallel_invoke([&] { if (simple.size() > kScanHoles) index.prepare_boxes(); }, [&] { over_simple(plan_unchecked); });
   over_simple([&](std::size_t h) {
     validate(soup, index, plans[h]);
     planned[h] = 1;

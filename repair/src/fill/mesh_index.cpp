@@ -14,10 +14,13 @@
 namespace s2c::repair::fill {
 namespace {
 
-bool valid_face(const TriangleSoup& soup, std::size_t f) {  // bad index: ignored
-  const auto& t = soup.faces[f];
-  const int nv = static_cast<int>(soup.vertices.size());
-  return (t[0] | t[1] | t[2]) >= 0 && t[0] < nv && t[1] < nv && t[2] < nv;
+// A face with a bad (negative or too large) vertex index is ignored; as unsigned a negative
+// index is too large.
+bool valid_face(const std::array<int, 3>& t, unsigned nv) {
+  return static_cast<unsigned>(t[0]) < nv && static_cast<unsigned>(t[1]) < nv && static_cast<unsigned>(t[2]) < nv;
+}
+bool valid_face(const TriangleSoup& soup, std::size_t f) {
+  return valid_face(soup.faces[f], static_cast<unsigned>(soup.vertices.size()));
 }
 
 // float boxes that contain the double ones: the conversion rounds to nearest (half an ulp, 2⁻²⁴
@@ -43,6 +46,12 @@ FaceBox face_box(const TriangleSoup& soup, std::size_t f) {
   return {a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c), a.allFinite() && b.allFinite() && c.allFinite()};
 }
 
+// Whether valid face f's box is not apart from [lo, hi] (a face with a non-finite corner always is).
+bool face_near(const TriangleSoup& soup, std::size_t f, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  const FaceBox b = face_box(soup, f);
+  return !b.finite || !((b.hi.array() < lo.array()).any() || (b.lo.array() > hi.array()).any());
+}
+
 }  // namespace
 
 MeshIndex::MeshIndex(const TriangleSoup& soup) : soup_(soup) {
@@ -51,13 +60,10 @@ MeshIndex::MeshIndex(const TriangleSoup& soup) : soup_(soup) {
   const std::size_t nf = soup.faces.size();
   const auto nv = static_cast<unsigned>(soup.vertices.size());
   const std::array<int, 3>* faces = soup.faces.data();
-  const auto valid = [nv](const std::array<int, 3>& t) {
-    return static_cast<unsigned>(t[0]) < nv && static_cast<unsigned>(t[1]) < nv && static_cast<unsigned>(t[2]) < nv;
-  };
   vf_offset_.assign(std::size_t{nv} + 1, 0);
   int* count = vf_offset_.data() + 1;
   for (std::size_t f = 0; f < nf; ++f)
-    if (valid(faces[f]))
+    if (valid_face(faces[f], nv))
       for (int c : faces[f]) ++count[c];
   for (std::size_t v = 1; v < vf_offset_.size(); ++v) vf_offset_[v] += vf_offset_[v - 1];
   vf_faces_.resize(static_cast<std::size_t>(vf_offset_.back()));
@@ -65,7 +71,7 @@ MeshIndex::MeshIndex(const TriangleSoup& soup) : soup_(soup) {
   int* out = vf_faces_.data();
   int* at = next.data();
   for (std::size_t f = 0; f < nf; ++f)
-    if (valid(faces[f]))
+    if (valid_face(faces[f], nv))
       for (int c : faces[f]) out[at[c]++] = static_cast<int>(f);
 }
 
@@ -118,12 +124,8 @@ void MeshIndex::faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
   for (std::size_t k = first / kBlock; k < block_boxes_.size(); ++k) {
     if (!near(block_boxes_[k])) continue;
     const std::size_t end = std::min(boxed_, (k + 1) * kBlock);
-    for (std::size_t f = std::max(k * kBlock, first); f < end; ++f) {
-      if (!valid_face(soup_, f)) continue;
-      const FaceBox b = face_box(soup_, f);
-      if (!b.finite || !((b.hi.array() < lo.array()).any() || (b.lo.array() > hi.array()).any()))
-        out.push_back(static_cast<int>(f));
-    }
+    for (std::size_t f = std::max(k * kBlock, first); f < end; ++f)
+      if (valid_face(soup_, f) && face_near(soup_, f, lo, hi)) out.push_back(static_cast<int>(f));
   }
 }
 
@@ -134,12 +136,8 @@ void MeshIndex::scan_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, 
   if (first >= faces) return;
   // A few faces (appended since `first`): their boxes directly.
   if (3 * (faces - first) < vertices) {
-    for (std::size_t f = first; f < faces; ++f) {
-      if (!valid_face(soup, f)) continue;
-      const FaceBox b = face_box(soup, f);
-      if (!b.finite || !((b.hi.array() < lo.array()).any() || (b.lo.array() > hi.array()).any()))
-        out.push_back(static_cast<int>(f));
-    }
+    for (std::size_t f = first; f < faces; ++f)
+      if (valid_face(soup, f) && face_near(soup, f, lo, hi)) out.push_back(static_cast<int>(f));
     return;
   }
   // Outcode bit 2a: below lo on axis a, bit 2a+1: above hi. A non-finite corner gets none, so
@@ -158,9 +156,8 @@ void MeshIndex::scan_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, 
   const auto nv = static_cast<unsigned>(vertices);
   const std::array<int, 3>* face = soup.faces.data();
   for (std::size_t f = first; f < faces; ++f) {
-    const auto a = static_cast<unsigned>(face[f][0]), b = static_cast<unsigned>(face[f][1]),
-               d = static_cast<unsigned>(face[f][2]);
-    if (a < nv && b < nv && d < nv && (c[a] & c[b] & c[d]) == 0) out.push_back(static_cast<int>(f));
+    const auto& t = face[f];
+    if (valid_face(t, nv) && (c[t[0]] & c[t[1]] & c[t[2]]) == 0) out.push_back(static_cast<int>(f));
   }
 }
 
