@@ -523,6 +523,7 @@ std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& 
   const auto plan_unchecked = [&](std::size_t h) { plans[h] = plan_hole(soup, index, holes[h], options, false); };
   // Up to two holes each validation scans vertices and faces once; more share block boxes.
   constexpr std::size_t kScanHoles = 2;
+  if (simple.size() > kScanHoles) index.use_blocks();  // before the plans, which ask scanning()
   tbb::parallel_invoke([&] { if (simple.size() > kScanHoles) index.prepare_boxes(); }, [&] { over_simple(plan_unchecked); });
   over_simple([&](std::size_t h) {
     validate(soup, index, plans[h]);

@@ -14,6 +14,8 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
 
+#include "fill/local_ids.h"
+
 namespace s2c::repair::fill {
 namespace {
 
@@ -360,26 +362,53 @@ bool fair(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, bool t
   const int n = patch.rim_size();
   const int unknowns = patch.size() - n;
   if (unknowns == 0) return true;
-  // Flat sorted arrays rather than hash maps (this runs for every hole). Nodes by soup index (a
-  // repeated rim vertex is one node with the union of its fans): (node, neighbour) pairs.
-  std::vector<std::pair<int, int>> links;
-  links.reserve(6 * patch.faces.size());
+  // Nodes by soup index (a repeated rim vertex is one node with the union of its fans): the
+  // (node, neighbour) pairs, unique and ascending, by a counting sort over the nodes (rim
+  // vertices ascending, then the new ones) and a sort of each node's few neighbours; small
+  // tables rather than sorts of everything or hash maps (this runs for every hole).
+  std::vector<int> rim_nodes;
+  if (tangent_continuous) {
+    rim_nodes = patch.rim;
+    std::sort(rim_nodes.begin(), rim_nodes.end());
+    rim_nodes.erase(std::unique(rim_nodes.begin(), rim_nodes.end()), rim_nodes.end());
+  }
+  const LocalIds rim_id(rim_nodes);
+  const auto node_of = [&](int g) {  // -1: not a node (a rim vertex without the C1 join)
+    return g >= patch.base ? static_cast<int>(rim_nodes.size()) + (g - patch.base) : rim_id.find(g);
+  };
+  std::vector<std::pair<int, int>> pairs;  // (node number, neighbour)
+  pairs.reserve(6 * patch.faces.size());
   for (const auto& t : patch.faces)
     for (int k = 0; k < 3; ++k) {
-      const int g = patch.global(t[k]);
-      if (!tangent_continuous && g < patch.base) continue;  // rows for the new vertices only
-      for (int o : {t[(k + 1) % 3], t[(k + 2) % 3]}) links.emplace_back(g, patch.global(o));
+      const int node = node_of(patch.global(t[k]));
+      if (node < 0) continue;  // rows for the new vertices only
+      for (int o : {t[(k + 1) % 3], t[(k + 2) % 3]}) pairs.emplace_back(node, patch.global(o));
     }
-  if (tangent_continuous) {
-    std::vector<int> around;
-    for (int g : patch.rim) {
-      around.clear();
-      index.append_neighbours(g, around);
-      for (int u : around) links.emplace_back(g, u);
+  for (std::size_t r = 0; r < rim_nodes.size(); ++r)
+    index.for_each_face_of(rim_nodes[r], [&](int f) {
+      for (int c : soup.faces[static_cast<std::size_t>(f)])
+        if (c != rim_nodes[r]) pairs.emplace_back(static_cast<int>(r), c);
+    });
+  const std::size_t nodes = rim_nodes.size() + static_cast<std::size_t>(unknowns);
+  std::vector<int> first_link(nodes + 1, 0);
+  for (const auto& pr : pairs) ++first_link[static_cast<std::size_t>(pr.first) + 1];
+  for (std::size_t k = 1; k <= nodes; ++k) first_link[k] += first_link[k - 1];
+  std::vector<std::pair<int, int>> links(pairs.size());  // (node, neighbour) by soup index
+  {
+    std::vector<int> next(first_link.begin(), first_link.end() - 1);
+    for (const auto& [node, other] : pairs) {
+      const int g = static_cast<std::size_t>(node) < rim_nodes.size() ? rim_nodes[static_cast<std::size_t>(node)]
+                                                                      : patch.base + node - static_cast<int>(rim_nodes.size());
+      links[static_cast<std::size_t>(next[static_cast<std::size_t>(node)]++)] = {g, other};
     }
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < nodes; ++k) {
+      const auto from = links.begin() + first_link[k], to = links.begin() + first_link[k + 1];
+      std::sort(from, to);
+      kept = static_cast<std::size_t>(std::unique_copy(from, to, links.begin() + static_cast<std::ptrdiff_t>(kept)) - links.begin());
+    }
+    links.resize(kept);
   }
-  std::sort(links.begin(), links.end());
-  links.erase(std::unique(links.begin(), links.end()), links.end());
   const auto position = [&](int g) -> const Eigen::Vector3d& {
     return g >= patch.base ? patch.points[static_cast<std::size_t>(g - patch.base + n)] : soup.vertices[g];
   };
@@ -387,39 +416,30 @@ bool fair(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, bool t
   // faces and, for the rim nodes of the C1 join, the mesh faces around them; taken on the
   // refined patch before fairing. A weight is clamped to a small positive floor: obtuse
   // triangles give negative cotangents that would let the solve fold the patch.
-  std::vector<std::pair<std::uint64_t, double>> cot;  // (edge, half cotangent), summed below
+  SmallTable<std::uint64_t, double> cot(3 * patch.faces.size());  // edge → sum of half cotangents
   const auto add_triangle = [&](int a, int b, int c) {
     const std::array<int, 3> t{a, b, c};
     for (int k = 0; k < 3; ++k) {
       const int o = t[k], u = t[(k + 1) % 3], w = t[(k + 2) % 3];
       const Eigen::Vector3d e1 = position(u) - position(o), e2 = position(w) - position(o);
       const double sn = e1.cross(e2).norm();
-      if (sn > 0) cot.emplace_back(edge_key(u, w), 0.5 * e1.dot(e2) / sn);
+      if (!(sn > 0)) continue;
+      const double half = 0.5 * e1.dot(e2) / sn;
+      const auto [sum, added] = cot.insert(edge_key(u, w), half);  // summed in the order faces come
+      if (!added) *sum += half;
     }
   };
   for (const auto& t : patch.faces) add_triangle(patch.global(t[0]), patch.global(t[1]), patch.global(t[2]));
   if (tangent_continuous) {
     std::vector<int> mesh_faces;
-    for (int g : patch.rim) index.for_each_face_of(g, [&](int f) { mesh_faces.push_back(f); });
+    for (int g : rim_nodes) index.for_each_face_of(g, [&](int f) { mesh_faces.push_back(f); });
     std::sort(mesh_faces.begin(), mesh_faces.end());
     mesh_faces.erase(std::unique(mesh_faces.begin(), mesh_faces.end()), mesh_faces.end());
     for (int f : mesh_faces) add_triangle(soup.faces[f][0], soup.faces[f][1], soup.faces[f][2]);
   }
-  // Per edge the sum in the order the faces were added (stable sort).
-  std::stable_sort(cot.begin(), cot.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-  std::size_t edges = 0;
-  for (std::size_t i = 0; i < cot.size();) {
-    std::size_t j = i + 1;
-    double sum = cot[i].second;
-    for (; j < cot.size() && cot[j].first == cot[i].first; ++j) sum += cot[j].second;
-    cot[edges++] = {cot[i].first, sum};
-    i = j;
-  }
-  cot.resize(edges);
   const auto cot_of = [&](int a, int b) {
-    const std::uint64_t key = edge_key(a, b);
-    const auto it = std::lower_bound(cot.begin(), cot.end(), key, [](const auto& e, std::uint64_t k) { return e.first < k; });
-    return it != cot.end() && it->first == key ? it->second : 0.0;
+    const double* sum = cot.find(edge_key(a, b));
+    return sum ? *sum : 0.0;
   };
   constexpr double kMinCot = 0.05;
   std::vector<Eigen::Triplet<double>> trip;
@@ -468,12 +488,13 @@ bool fair(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, bool t
     // ring (fixed). With W the umbrella rows of the new vertices over the rows of A:
     // W (A x + B) = 0, a square nonsymmetric system (sparse LU).
     std::vector<Eigen::Triplet<double>> wt;
+    VertexTable row_table(row_of.size());
+    for (const auto& [center, r] : row_of) row_table.insert(center, r);
     for (const auto& [center, r] : row_of)
       if (center >= patch.base) wt.emplace_back(center - patch.base, r, -1.0);
     for (const Term& t : umbrella) {
       if (t.center < patch.base) continue;
-      const auto it = std::lower_bound(row_of.begin(), row_of.end(), std::pair{t.other, -1});
-      if (it != row_of.end() && it->first == t.other) wt.emplace_back(t.center - patch.base, it->second, t.w);
+      if (const int r = row_table.find(t.other); r >= 0) wt.emplace_back(t.center - patch.base, r, t.w);
     }
     Eigen::SparseMatrix<double> W(unknowns, row);
     W.setFromTriplets(wt.begin(), wt.end());

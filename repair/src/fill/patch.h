@@ -3,6 +3,7 @@
 // under construction. Not part of the public API (see s2c/repair/fill.h).
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -71,11 +72,12 @@ class MeshIndex {
   ///   shuffled mesh it degrades to a linear scan.
   void faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, std::vector<int>& out,
                   std::size_t first = 0) const;
-  /// Switches faces_near to the block boxes and builds them now (for calls with many holes).
-  void prepare_boxes() const {
-    use_blocks_ = true;
-    extend_boxes();
-  }
+  /// Switches faces_near to the block boxes (for calls with many holes). Set before any thread
+  /// asks scanning(); then prepare_boxes() builds the boxes (O(#F)) while the holes are planned.
+  void use_blocks() const { use_blocks_ = true; }
+  void prepare_boxes() const { extend_boxes(); }
+  /// Whether faces_near scans vertices and faces (no block boxes): then a query costs O(#V + #F).
+  bool scanning() const { return !use_blocks_; }
 
  private:
   void extend_boxes() const;  // boxes for the faces not boxed yet (appended ones included)
@@ -101,6 +103,14 @@ struct Patch {
   std::vector<double> sigma;                ///< Liepa's density per local vertex, mm
   std::vector<std::array<int, 3>> faces;    ///< local indices, oriented like the loop
   int base = 0;                             ///< soup index of the first new vertex
+  /// check_patch_topology passed for these faces (set where it runs early, beside other work;
+  /// moving the points keeps it true, changing the faces must reset it).
+  bool topology_ok = false;
+  /// Mesh faces near [near_lo, near_hi] (MeshIndex::faces_near, ascending), found early like
+  /// topology_ok; a full check_patch uses them when that box holds the patch's.
+  std::vector<int> near_faces;
+  Eigen::Vector3d near_lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  Eigen::Vector3d near_hi = near_lo;
 
   int rim_size() const { return static_cast<int>(rim.size()); }
   int size() const { return static_cast<int>(points.size()); }

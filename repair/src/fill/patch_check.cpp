@@ -142,6 +142,17 @@ std::string check_topology(const TriangleSoup& soup, const MeshIndex& index, con
   return {};
 }
 
+// Whether a face from `first` on uses a rim vertex of `p`. A re-check's topology (rim_only) only
+// reads edges and fans at rim vertices: faces appended away from the rim cannot change it.
+bool appended_faces_touch_rim(const TriangleSoup& soup, const Patch& p, std::size_t first) {
+  std::vector<int> rim(p.rim);
+  std::sort(rim.begin(), rim.end());
+  for (std::size_t f = first; f < soup.faces.size(); ++f)
+    for (int c : soup.faces[f])
+      if (std::binary_search(rim.begin(), rim.end(), c)) return true;
+  return false;
+}
+
 struct Box {
   Eigen::Vector3d lo, hi;
 };
@@ -168,7 +179,9 @@ std::string check_patch(const TriangleSoup& soup, const MeshIndex& index, const 
       return "patch triangle with a repeated vertex";
     if (scope.patch_itself && collinear(tri[f][0], tri[f][1], tri[f][2])) return "degenerate patch triangle";
   }
-  if (auto why = check_topology(soup, index, p, !scope.patch_itself); !why.empty()) return why;
+  const bool topology = scope.patch_itself ? !p.topology_ok : appended_faces_touch_rim(soup, p, scope.mesh_faces_from);
+  if (topology)
+    if (auto why = check_topology(soup, index, p, !scope.patch_itself); !why.empty()) return why;
 
   std::vector<Box> boxes(tri.size());
   Box all{tri[0][0], tri[0][0]};
@@ -177,8 +190,13 @@ std::string check_patch(const TriangleSoup& soup, const MeshIndex& index, const 
     all.lo = all.lo.cwiseMin(boxes[f].lo);
     all.hi = all.hi.cwiseMax(boxes[f].hi);
   }
-  std::vector<int> near;
-  index.faces_near(all.lo, all.hi, near, scope.mesh_faces_from);
+  // Faces found early for a larger box serve as well: the loop below tests each face's box
+  // against the patch's anyway, in the same (ascending) order.
+  const bool early = scope.patch_itself && scope.mesh_faces_from == 0 && (p.near_lo.array() <= all.lo.array()).all() &&
+                     (all.hi.array() <= p.near_hi.array()).all();
+  std::vector<int> scanned;
+  if (!early) index.faces_near(all.lo, all.hi, scanned, scope.mesh_faces_from);
+  const std::vector<int>& near = early ? p.near_faces : scanned;
   if (!scope.patch_itself && near.empty()) return {};  // nothing new nearby
   // Broad phase: patch faces sorted by the low end of their boxes along the patch's longest
   // axis; a query box scans from the first face that can reach it (low end ≥ its low end − the
@@ -220,6 +238,10 @@ std::string check_patch(const TriangleSoup& soup, const MeshIndex& index, const 
     if (against_patch(q, t, bq, -1) >= 0) return "patch intersects the mesh near the hole (face " + std::to_string(f) + ")";
   }
   return {};
+}
+
+std::string check_patch_topology(const TriangleSoup& soup, const MeshIndex& index, const Patch& patch) {
+  return check_topology(soup, index, patch, false);
 }
 
 }  // namespace s2c::repair::fill

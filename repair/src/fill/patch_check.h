@@ -24,4 +24,9 @@ struct CheckScope {
 std::string check_patch(const TriangleSoup& soup, const MeshIndex& index, const Patch& patch,
                         const CheckScope& scope = {});
 
+/// check_patch's topology part alone (the faces against the soup as it is; the points play no
+/// part). A patch that passed it (Patch::topology_ok) skips it in a full check_patch, so that it
+/// can run while something else still moves the points (the RBF fill's fit).
+std::string check_patch_topology(const TriangleSoup& soup, const MeshIndex& index, const Patch& patch);
+
 }  // namespace s2c::repair::fill

@@ -20,6 +20,8 @@
 #include <tbb/parallel_invoke.h>
 
 #include "fill/liepa.h"
+#include "fill/local_ids.h"
+#include "fill/patch_check.h"
 #include "fill/rim_surfaces.h"
 #include "s2c/core/clock.h"
 
@@ -482,33 +484,35 @@ bool project(const PieceSurfaces& combined, const HoleShape& shape, const FillOp
   return true;
 }
 
-// The ring of every vertex reached by the search around a hole: a sorted list, since a hole's
-// rings hold a few hundred vertices (binary searches and one merge per ring instead of a hash
-// map's allocation per vertex).
+// The ring of every vertex reached by the search around a hole: a vertex table (a hole's rings
+// hold a few hundred vertices; no allocation per vertex, no sort per ring) and the list of
+// (vertex, ring) sorted when it is read.
 class Rings {
  public:
-  /// Gives ring r to the vertices of `candidates` not reached yet; returns them, ascending.
-  std::vector<int> add(std::vector<int> candidates, int r) {
-    std::sort(candidates.begin(), candidates.end());
-    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+  /// Gives ring r to the vertices of `candidates` not reached yet; returns them.
+  std::vector<int> add(const std::vector<int>& candidates, int r) {
     std::vector<int> fresh;
     for (int v : candidates)
-      if (of(v) < 0) fresh.push_back(v);
-    const auto middle = static_cast<std::ptrdiff_t>(sorted_.size());
-    for (int v : fresh) sorted_.emplace_back(v, r);
-    std::inplace_merge(sorted_.begin(), sorted_.begin() + middle, sorted_.end());
+      if (table_.insert(v, r)) {
+        fresh.push_back(v);
+        list_.emplace_back(v, r);
+        sorted_ = false;
+      }
     return fresh;
   }
   /// v's ring, -1 when not reached.
-  int of(int v) const {
-    const auto it = std::lower_bound(sorted_.begin(), sorted_.end(), std::pair{v, std::numeric_limits<int>::min()});
-    return it != sorted_.end() && it->first == v ? it->second : -1;
-  }
+  int of(int v) const { return table_.find(v); }
   /// (vertex, ring), ascending by vertex.
-  const std::vector<std::pair<int, int>>& all() const { return sorted_; }
+  const std::vector<std::pair<int, int>>& all() {
+    if (!sorted_) std::sort(list_.begin(), list_.end());
+    sorted_ = true;
+    return list_;
+  }
 
  private:
-  std::vector<std::pair<int, int>> sorted_;
+  VertexTable table_{256};
+  std::vector<std::pair<int, int>> list_;
+  bool sorted_ = true;
 };
 
 }  // namespace
@@ -621,6 +625,23 @@ bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, co
     patch_built = triangulate(soup, index, patch, patch_why) &&
                   refine(index, patch, options.max_patch_vertices, patch_why) &&
                   fair(soup, index, patch, true, patch_why);
+    if (!patch_built) return;
+    // Ahead of the fit: the patch's topology and, where the index scans the whole mesh for a
+    // query, the faces near where the patch can end up (projection moves a vertex at most
+    // shape.diameter; a quarter of it is plenty in practice, and check_patch scans again when
+    // the patch left the box).
+    patch.topology_ok = check_patch_topology(soup, index, patch).empty();
+    if (index.scanning()) {
+      Eigen::Vector3d lo = patch.points[0], hi = lo;
+      for (const auto& q : patch.points) {
+        lo = lo.cwiseMin(q);
+        hi = hi.cwiseMax(q);
+      }
+      const Eigen::Vector3d margin = Eigen::Vector3d::Constant(0.25 * shape.diameter);
+      patch.near_lo = lo - margin;
+      patch.near_hi = hi + margin;
+      index.faces_near(patch.near_lo, patch.near_hi, patch.near_faces);
+    }
   };
   tbb::parallel_invoke(surface_side, patch_side);
   if (!patch_built) {

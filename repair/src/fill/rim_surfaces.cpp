@@ -6,6 +6,8 @@
 #include <limits>
 #include <unordered_map>
 
+#include "fill/local_ids.h"
+
 namespace s2c::repair::fill {
 namespace {
 
@@ -30,10 +32,11 @@ double surface_noise(const TriangleSoup& soup, const MeshIndex& index, const std
   std::vector<double> normal_laplacian(n, none);
   std::vector<std::size_t> first(n + 1, 0);
   std::vector<int> nbrs;
+  const LocalIds local(vertices), skipped(skip);
   for (std::size_t i = 0; i < n; ++i) {
     const int v = vertices[i];
     first[i] = nbrs.size();
-    if (std::binary_search(skip.begin(), skip.end(), v)) continue;
+    if (skipped.contains(v)) continue;
     index.append_neighbours(v, nbrs);
     const auto list = nbrs.begin() + static_cast<std::ptrdiff_t>(first[i]);
     const Eigen::Vector3d normal = area_normal(soup, index, v, at);
@@ -49,9 +52,9 @@ double surface_noise(const TriangleSoup& soup, const MeshIndex& index, const std
     double sum = 0;
     int count = 0;
     for (std::size_t k = first[i]; k < first[i + 1]; ++k) {
-      const auto it = std::lower_bound(vertices.begin(), vertices.end(), nbrs[k]);
-      if (it == vertices.end() || *it != nbrs[k]) continue;
-      const double l = normal_laplacian[static_cast<std::size_t>(it - vertices.begin())];
+      const int at_k = local.find(nbrs[k]);
+      if (at_k < 0) continue;
+      const double l = normal_laplacian[static_cast<std::size_t>(at_k)];
       if (std::isnan(l)) continue;
       sum += l;
       ++count;
@@ -80,27 +83,46 @@ CreaseSplit split_at_creases(const TriangleSoup& soup, const MeshIndex& index, c
   if (!(crease_deg > 0)) return whole();
   CreaseSplit out;
   // Faces with all three corners in `vertices` (sorted), their normals and the edges between
-  // them; flat sorted arrays rather than hash maps (this runs for every hole).
-  const auto in_set = [&](int v) { return std::binary_search(vertices.begin(), vertices.end(), v); };
-  std::vector<int> faces;  // every face of the vertices once, then those wholly inside
-  for (int v : vertices) index.for_each_face_of(v, [&](int f) { faces.push_back(f); });
+  // them; flat sorted arrays rather than hash maps (this runs for every hole). Each such face is
+  // taken once, from its smallest corner.
+  const LocalIds local(vertices);
+  std::vector<int> faces;  // ascending
+  for (int v : vertices)
+    index.for_each_face_of(v, [&](int f) {
+      const auto& t = soup.faces[static_cast<std::size_t>(f)];
+      if (v == std::min({t[0], t[1], t[2]}) && local.contains(t[0]) && local.contains(t[1]) && local.contains(t[2]))
+        faces.push_back(f);
+    });
   std::sort(faces.begin(), faces.end());
-  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
-  faces.erase(std::remove_if(faces.begin(), faces.end(),
-                             [&](int f) {
-                               const auto& t = soup.faces[static_cast<std::size_t>(f)];
-                               return !(in_set(t[0]) && in_set(t[1]) && in_set(t[2]));
-                             }),
-              faces.end());
+  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());  // (a corner repeated in a face)
   std::vector<Eigen::Vector3d> normal(faces.size());
-  std::vector<std::pair<std::uint64_t, int>> by_edge;  // (edge key, position in `faces`)
-  by_edge.reserve(3 * faces.size());
+  // The faces' edges by (smaller corner, larger corner, position in `faces`): a counting sort by
+  // the smaller corner's local number (local order is vertex order), then each corner's few
+  // edges by insertion.
+  struct Edge {
+    int lo, hi, face;
+    bool operator<(const Edge& o) const { return hi != o.hi ? hi < o.hi : face < o.face; }
+  };
+  std::vector<int> first_edge(vertices.size() + 1, 0);
   for (std::size_t i = 0; i < faces.size(); ++i) {
     const auto& t = soup.faces[static_cast<std::size_t>(faces[i])];
     normal[i] = unit_normal(at(t[0]), at(t[1]), at(t[2]));
-    for (int k = 0; k < 3; ++k) by_edge.emplace_back(edge_key(t[k], t[(k + 1) % 3]), static_cast<int>(i));
+    for (int k = 0; k < 3; ++k) ++first_edge[local.find(std::min(t[k], t[(k + 1) % 3])) + 1];
   }
-  std::sort(by_edge.begin(), by_edge.end());
+  for (std::size_t v = 1; v < first_edge.size(); ++v) first_edge[v] += first_edge[v - 1];
+  std::vector<Edge> by_edge(static_cast<std::size_t>(first_edge.back()));
+  {
+    std::vector<int> next(first_edge.begin(), first_edge.end() - 1);
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      const auto& t = soup.faces[static_cast<std::size_t>(faces[i])];
+      for (int k = 0; k < 3; ++k) {
+        const int a = std::min(t[k], t[(k + 1) % 3]), b = std::max(t[k], t[(k + 1) % 3]);
+        by_edge[static_cast<std::size_t>(next[local.find(a)]++)] = {a, b, static_cast<int>(i)};
+      }
+    }
+    for (std::size_t v = 0; v + 1 < first_edge.size(); ++v)
+      std::sort(by_edge.begin() + first_edge[v], by_edge.begin() + first_edge[v + 1]);
+  }
   // Region growing across smooth edges (degenerate faces join anything: they have no normal).
   const double cos_crease = std::cos(crease_deg * kPi / 180);
   DisjointSets pieces(faces.size());
@@ -111,15 +133,15 @@ CreaseSplit split_at_creases(const TriangleSoup& soup, const MeshIndex& index, c
   std::vector<Crease> creases;
   for (std::size_t e = 0; e < by_edge.size();) {
     std::size_t end = e + 1;
-    while (end < by_edge.size() && by_edge[end].first == by_edge[e].first) ++end;
+    const auto same_edge = [&](const Edge& x, const Edge& y) { return x.lo == y.lo && x.hi == y.hi; };
+    while (end < by_edge.size() && same_edge(by_edge[end], by_edge[e])) ++end;
     if (end - e == 2) {  // a manifold edge between two of the faces
-      const std::uint64_t key = by_edge[e].first;
-      const int a = by_edge[e].second, b = by_edge[e + 1].second;
+      const int u = by_edge[e].lo, w = by_edge[e].hi;
+      const int a = by_edge[e].face, b = by_edge[e + 1].face;
       if (normal[a].squaredNorm() == 0 || normal[b].squaredNorm() == 0 || normal[a].dot(normal[b]) >= cos_crease) {
         pieces.unite(a, b);
       } else {
         const auto& tb = soup.faces[static_cast<std::size_t>(faces[b])];
-        const int u = static_cast<int>(key >> 32), w = static_cast<int>(key & 0xffffffffu);
         int far = tb[0];
         for (int c : tb)
           if (c != u && c != w) far = c;
@@ -138,37 +160,47 @@ CreaseSplit split_at_creases(const TriangleSoup& soup, const MeshIndex& index, c
     one.crease_vertices = out.crease_vertices;
     return one;
   };
-  // Pieces, in order of their first face; small ones (a crease's sliver) are dropped. Each
-  // piece's (vertex, face) incidences, sorted, give its vertices and their normals.
-  std::vector<std::pair<int, int>> by_root;  // (root, position in `faces`)
-  for (std::size_t i = 0; i < faces.size(); ++i) by_root.emplace_back(pieces.find(static_cast<int>(i)), static_cast<int>(i));
-  std::sort(by_root.begin(), by_root.end());
-  std::vector<int> piece_of_root(faces.size(), -1);
-  for (std::size_t r = 0; r < by_root.size();) {
-    std::size_t end = r + 1;
-    while (end < by_root.size() && by_root[end].first == by_root[r].first) ++end;
-    std::vector<std::pair<int, int>> corners;  // (vertex, position in `faces`)
-    for (std::size_t k = r; k < end; ++k)
-      for (int c : soup.faces[static_cast<std::size_t>(faces[by_root[k].second])]) corners.emplace_back(c, by_root[k].second);
-    std::sort(corners.begin(), corners.end());
-    SmoothPiece p;
-    for (std::size_t c = 0; c < corners.size();) {
-      std::size_t stop = c + 1;
-      while (stop < corners.size() && corners[stop].first == corners[c].first) ++stop;
-      Eigen::Vector3d n = Eigen::Vector3d::Zero();
-      for (std::size_t k = c; k < stop; ++k) {
-        const auto& t = soup.faces[static_cast<std::size_t>(faces[corners[k].second])];
-        n += (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0]));
+  // Pieces, in order of their root face; small ones (a crease's sliver) are dropped. The faces
+  // by root (a counting sort, ascending within a root); per piece each face's area vector is
+  // summed into its corners in face order, and the touched corners, ascending, are the piece's
+  // vertices.
+  const std::size_t nf = faces.size();
+  std::vector<int> root(nf), first_of_root(nf + 1, 0);
+  for (std::size_t i = 0; i < nf; ++i) ++first_of_root[(root[i] = pieces.find(static_cast<int>(i))) + 1];
+  for (std::size_t r = 1; r <= nf; ++r) first_of_root[r] += first_of_root[r - 1];
+  std::vector<int> by_root(nf);
+  {
+    std::vector<int> next(first_of_root.begin(), first_of_root.end() - 1);
+    for (std::size_t i = 0; i < nf; ++i) by_root[static_cast<std::size_t>(next[root[i]]++)] = static_cast<int>(i);
+  }
+  std::vector<int> piece_of_root(nf, -1);
+  std::vector<Eigen::Vector3d> sum(vertices.size(), Eigen::Vector3d::Zero());
+  std::vector<int> touched;
+  for (std::size_t r = 0; r < nf; ++r) {
+    if (first_of_root[r] == first_of_root[r + 1]) continue;
+    touched.clear();
+    for (int k = first_of_root[r]; k < first_of_root[r + 1]; ++k) {
+      const auto& t = soup.faces[static_cast<std::size_t>(faces[static_cast<std::size_t>(by_root[static_cast<std::size_t>(k)])])];
+      const Eigen::Vector3d area = (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0]));
+      for (int c : t) {
+        const int l = local.find(c);
+        touched.push_back(l);
+        sum[static_cast<std::size_t>(l)] += area;
       }
-      p.vertices.push_back(corners[c].first);
+    }
+    std::sort(touched.begin(), touched.end());
+    touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+    SmoothPiece p;
+    for (int l : touched) {
+      Eigen::Vector3d& n = sum[static_cast<std::size_t>(l)];
+      p.vertices.push_back(vertices[static_cast<std::size_t>(l)]);
       p.normals.push_back(n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero());
-      c = stop;
+      n.setZero();
     }
     if (p.vertices.size() >= min_vertices) {
-      piece_of_root[by_root[r].first] = static_cast<int>(out.pieces.size());
+      piece_of_root[r] = static_cast<int>(out.pieces.size());
       out.pieces.push_back(std::move(p));
     }
-    r = end;
   }
   if (out.pieces.size() < 2) return whole_with_creases();
   // How the kept pieces meet: every crease between two of them votes.

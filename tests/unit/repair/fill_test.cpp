@@ -731,7 +731,11 @@ TEST(Fill, MeshIndexFindsEveryFaceNearABoxIncludingAppendedOnes) {
         if (std::count(s.faces[f].begin(), s.faces[f].end(), 7)) nan_faces.push_back(f);
     }
     fill::MeshIndex index(s);
-    if (blocks) index.prepare_boxes();  // built before the faces are appended, extended after
+    if (blocks) {  // built before the faces are appended, extended after
+      index.use_blocks();
+      index.prepare_boxes();
+    }
+    EXPECT_EQ(index.scanning(), !blocks);
     const int b = static_cast<int>(s.vertices.size());
     s.vertices.push_back({-30, -30, 0});
     s.vertices.push_back({30, -30, 0});
@@ -824,6 +828,51 @@ TEST(Fill, PatchCheckedOnceIsRecheckedOnlyAgainstWhatWasAppended) {
   p.base = static_cast<int>(taken.vertices.size());
   const std::string rim = check(taken, since);
   EXPECT_NE(rim.find("rim edge would not be manifold"), std::string::npos) << rim;
+}
+
+TEST(Fill, PatchCheckUsesEarlyResultsOnlyWhereTheyHold) {
+  // The RBF fill checks a patch's topology and gathers the faces near it while the fit still
+  // runs (Patch::topology_ok, near_faces); check_patch then skips that work, but only where it
+  // still holds: the near list serves only when its box holds the patch.
+  TriangleSoup s = cut_faces(height_grid(10, [](double, double) { return 0.0; }),
+                             [](const Eigen::Vector3d& c) { return (c - Eigen::Vector3d(5, 5, 0)).norm() < 2.2; });
+  const Hole hole = grid_hole(s)[0];
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (int g : hole.loop) centre += s.vertices[g] / double(hole.loop.size());
+  // A face standing through where the patch will be.
+  const int b = static_cast<int>(s.vertices.size());
+  for (const Eigen::Vector3d& c : {Eigen::Vector3d(centre + Eigen::Vector3d(-0.5, 0, -1)),
+                                   Eigen::Vector3d(centre + Eigen::Vector3d(0.5, 0, -1)),
+                                   Eigen::Vector3d(centre + Eigen::Vector3d(0, 0.1, 1))})
+    s.vertices.push_back(c);
+  s.faces.push_back({b, b + 1, b + 2});
+  const fill::MeshIndex index(s);
+  ASSERT_TRUE(index.scanning());
+  fill::Patch p;
+  p.rim = hole.loop;
+  p.base = static_cast<int>(s.vertices.size());
+  for (int g : hole.loop) p.points.push_back(s.vertices[g]);
+  p.points.push_back(centre + Eigen::Vector3d(0, 0, 0.1));
+  const int n = p.rim_size();
+  for (int i = 0; i < n; ++i) p.faces.push_back({i, (i + 1) % n, n});
+  EXPECT_EQ(fill::check_patch_topology(s, index, p), "");
+  const std::string scanned = fill::check_patch(s, index, p);
+  EXPECT_NE(scanned.find("intersects the mesh"), std::string::npos) << scanned;
+  // Gathered early for a box holding the patch: the same answer.
+  p.topology_ok = true;
+  p.near_lo = Eigen::Vector3d(0, 0, -2);
+  p.near_hi = Eigen::Vector3d(10, 10, 2);
+  index.faces_near(p.near_lo, p.near_hi, p.near_faces);
+  EXPECT_EQ(fill::check_patch(s, index, p), scanned);
+  // A box the patch left (its vertex moved up since): the early list is not used.
+  p.near_faces.clear();
+  p.near_hi.z() = 0.05;
+  EXPECT_EQ(fill::check_patch(s, index, p), scanned);
+  // A bad topology is still found when topology_ok was not set.
+  fill::Patch twisted = p;
+  twisted.topology_ok = false;
+  std::swap(twisted.faces[0][0], twisted.faces[0][1]);
+  EXPECT_NE(fill::check_patch(s, index, twisted), "");
 }
 
 }  // namespace
