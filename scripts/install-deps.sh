@@ -11,6 +11,8 @@ pkgs=(
   libeigen3-dev libpcl-dev libopenmesh-dev libembree-dev libopencv-dev
   libspdlog-dev libfmt-dev nlohmann-json3-dev libcli11-dev libtbb-dev libgmp-dev
   libgtest-dev libgmock-dev
+  # reconstruct's point search (exact k-nearest / radius; PCL's FLANN syscalls per query)
+  libnanoflann-dev
   # hole filling's dense RBF solves (LAPACK with run-time CPU dispatch; the build with locks)
   libopenblas-pthread-dev
   # acquire: USB laser scanners (libusb) and the device tests' emulation (umockdev)

@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
-#include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/point_types.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "kd_search.h"
 
 namespace s2c {
 
@@ -13,14 +16,13 @@ double median_spacing(const std::vector<Eigen::Vector3d>& points) {
   auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
   cloud->reserve(points.size());
   for (const auto& p : points) cloud->emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
-  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
-  tree.setInputCloud(cloud);
+  const PointIndex<pcl::PointXYZ> tree(*cloud);
   std::vector<double> d;
-  std::vector<int> idx(2);
-  std::vector<float> sq(2);
+  pcl::Indices idx;
+  std::vector<float> sq;
   const std::size_t step = std::max<std::size_t>(1, cloud->size() / 4000);
   for (std::size_t i = 0; i < cloud->size(); i += step)
-    if (tree.nearestKSearch((*cloud)[i], 2, idx, sq) == 2 && sq[1] > 0) d.push_back(std::sqrt(sq[1]));
+    if (tree.knn((*cloud)[i].data, 2, idx, sq) == 2 && sq[1] > 0) d.push_back(std::sqrt(sq[1]));
   if (d.empty()) return 0;
   std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
   return d[d.size() / 2];
@@ -63,6 +65,42 @@ pcl::PointCloud<pcl::PointNormal> voxel_downsample(const pcl::PointCloud<pcl::Po
     q.curvature = static_cast<float>(a.curvature / a.count);
     out.push_back(q);
   }
+  return out;
+}
+
+pcl::PointCloud<pcl::PointNormal> remove_statistical_outliers(const pcl::PointCloud<pcl::PointNormal>& in, int mean_k,
+                                                              double sigma) {
+  const PointIndex<pcl::PointNormal> index(in);
+  // Per point, as PCL: the mean of the square roots of the k nearest squared distances, the
+  // query itself (first, at distance 0) left out; non-finite points count 0 and are kept.
+  std::vector<float> mean_distance(in.size(), 0.0f);
+  std::vector<char> valid(in.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, in.size(), 2048), [&](const auto& r) {
+    pcl::Indices idx;
+    std::vector<float> sq;
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      if (index.knn(in[i].data, mean_k + 1, idx, sq) == 0) continue;
+      double sum = 0.0;
+      for (std::size_t k = 1; k < sq.size(); ++k) sum += std::sqrt(sq[k]);
+      mean_distance[i] = static_cast<float>(sum / mean_k);
+      valid[i] = 1;
+    }
+  });
+  // Sums in PCL's order and precision (float products), so the threshold is PCL's to the bit.
+  double sum = 0, sq_sum = 0;
+  int count = 0;
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    sum += mean_distance[i];
+    sq_sum += mean_distance[i] * mean_distance[i];
+    count += valid[i];
+  }
+  const double mean = sum / count;
+  const double variance = (sq_sum - sum * sum / count) / (count - 1);
+  const double threshold = mean + sigma * std::sqrt(variance);
+  pcl::PointCloud<pcl::PointNormal> out;
+  out.reserve(in.size());
+  for (std::size_t i = 0; i < in.size(); ++i)
+    if (!(mean_distance[i] > threshold)) out.push_back(in[i]);
   return out;
 }
 

@@ -22,6 +22,13 @@ namespace s2c {
 /// its input when extent / leaf overflows 32-bit indices (room-sized scans at fine voxels).
 pcl::PointCloud<pcl::PointNormal> voxel_downsample(const pcl::PointCloud<pcl::PointNormal>& in, double voxel);
 
+/// PCL's StatisticalOutlierRemoval, same answers: drops the points whose mean distance to their
+/// `mean_k` nearest neighbours exceeds the mean of that over all points by `sigma` standard
+/// deviations. Its own, because PCL's filter cannot be given a search (kd_search.h) and queries
+/// one point at a time; here the queries run in parallel.
+pcl::PointCloud<pcl::PointNormal> remove_statistical_outliers(const pcl::PointCloud<pcl::PointNormal>& in, int mean_k,
+                                                              double sigma);
+
 /// A PCL point from a position and a direction (a normal, or the way to the sensor).
 inline pcl::PointNormal point_normal(const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
   pcl::PointNormal q;

@@ -2,12 +2,14 @@
 #include <algorithm>
 #include <cmath>
 #include <regex>
+#include <exception>
 #include <sstream>
 
 #include <fmt/format.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
 #include <pcl/point_types.h>
+#include <tbb/parallel_for.h>
 
 #include "s2c/core/errors.h"
 #include "s2c/core/io.h"
@@ -25,21 +27,30 @@ std::vector<View> views_of_stream(const Stream& s) {
   const Deprojector deproject(s.info);
   std::vector<View> views(s.frames.size());
   Progress progress("frames", s.frames.size());
-  for (std::size_t i = 0; i < s.frames.size(); ++i) {
-    View& v = views[i];
-    v.name = (s.dir / s.frames[i].file).string();
-    v.points = deproject.sensor_points(read_frame(s, i), &v.to_sensor, &v.pixel);
-    v.width = s.info.width;
-    v.height = s.info.height;
-    if (!s.poses.empty()) {
-      v.pose = s.pose_of(i);
-      if (!v.pose)
-        throw InvalidInput(fmt::format("{}: frame {} ({}) has no pose within 20 ms in poses.txt", s.dir.string(), i,
-                                       s.frames[i].file));
+  // Frames are decoded side by side; a bad frame's error is kept and the first bad frame's is
+  // thrown, as a sequential read would.
+  std::vector<std::exception_ptr> failed(s.frames.size());
+  tbb::parallel_for(std::size_t{0}, s.frames.size(), [&](std::size_t i) {
+    try {
+      View& v = views[i];
+      v.name = (s.dir / s.frames[i].file).string();
+      v.points = deproject.sensor_points(read_frame(s, i), &v.to_sensor, &v.pixel);
+      v.width = s.info.width;
+      v.height = s.info.height;
+      if (!s.poses.empty()) {
+        v.pose = s.pose_of(i);
+        if (!v.pose)
+          throw InvalidInput(fmt::format("{}: frame {} ({}) has no pose within 20 ms in poses.txt", s.dir.string(), i,
+                                         s.frames[i].file));
+      }
+      v.spacing_mm = median_spacing(v.points);
+      progress.advance();
+    } catch (...) {
+      failed[i] = std::current_exception();
     }
-    v.spacing_mm = median_spacing(v.points);
-    progress.advance();
-  }
+  });
+  for (const auto& e : failed)
+    if (e) std::rethrow_exception(e);
   return views;
 }
 
