@@ -13,16 +13,16 @@ namespace s2c {
 
 double median_spacing(const std::vector<Eigen::Vector3d>& points) {
   if (points.size() < 2) return 0;
-  auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-  cloud->reserve(points.size());
-  for (const auto& p : points) cloud->emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
-  const PointIndex<pcl::PointXYZ> tree(*cloud);
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  cloud.reserve(points.size());
+  for (const auto& p : points) cloud.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+  const PointIndex<pcl::PointXYZ> tree(cloud);
   std::vector<double> d;
   pcl::Indices idx;
   std::vector<float> sq;
-  const std::size_t step = std::max<std::size_t>(1, cloud->size() / 4000);
-  for (std::size_t i = 0; i < cloud->size(); i += step)
-    if (tree.knn((*cloud)[i].data, 2, idx, sq) == 2 && sq[1] > 0) d.push_back(std::sqrt(sq[1]));
+  const std::size_t step = std::max<std::size_t>(1, cloud.size() / 4000);
+  for (std::size_t i = 0; i < cloud.size(); i += step)
+    if (tree.knn(cloud[i].data, 2, idx, sq) == 2 && sq[1] > 0) d.push_back(std::sqrt(sq[1]));
   if (d.empty()) return 0;
   std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
   return d[d.size() / 2];

@@ -19,14 +19,16 @@ struct Points {
   std::vector<pcl::index_t> id;
 
   std::size_t kdtree_get_point_count() const { return id.size(); }
-  float kdtree_get_pt(std::uint32_t i, std::size_t d) const { return xyz[3 * static_cast<std::size_t>(i) + d]; }
+  float kdtree_get_pt(pcl::index_t i, std::size_t d) const { return xyz[3 * static_cast<std::size_t>(i) + d]; }
   template <class Box>
   bool kdtree_get_bbox(Box&) const {
     return false;
   }
 };
 
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, Points>, Points, 3, std::uint32_t>;
+// Positions in Points are pcl::index_t, so a query writes straight into the caller's indices.
+using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, Points, float, pcl::index_t>,
+                                                 Points, 3, pcl::index_t>;
 
 bool finite3(const float* q) { return std::isfinite(q[0]) && std::isfinite(q[1]) && std::isfinite(q[2]); }
 
@@ -77,13 +79,12 @@ int PointIndex<PointT>::knn(const float* query, int k, pcl::Indices& indices, st
   sq_dists.clear();
   if (!impl_->tree || k <= 0 || size() == 0 || !finite3(query)) return 0;
   const std::size_t want = std::min<std::size_t>(static_cast<std::size_t>(k), size());
-  std::vector<std::uint32_t> local(want);
+  indices.resize(want);
   sq_dists.resize(want);
-  const std::size_t found = impl_->tree->knnSearch(query, want, local.data(), sq_dists.data());
-  local.resize(found);
-  sq_dists.resize(found);
+  const std::size_t found = impl_->tree->knnSearch(query, want, indices.data(), sq_dists.data());
   indices.resize(found);
-  for (std::size_t j = 0; j < found; ++j) indices[j] = impl_->points.id[local[j]];
+  sq_dists.resize(found);
+  for (auto& i : indices) i = impl_->points.id[static_cast<std::size_t>(i)];  // position → cloud index
   return static_cast<int>(found);
 }
 
@@ -93,13 +94,13 @@ int PointIndex<PointT>::radius(const float* query, double radius, pcl::Indices& 
   indices.clear();
   sq_dists.clear();
   if (!impl_->tree || size() == 0 || !finite3(query) || !(radius >= 0)) return 0;
-  std::vector<std::pair<std::uint32_t, float>> matches;
+  std::vector<std::pair<pcl::index_t, float>> matches;
   impl_->tree->radiusSearch(query, static_cast<float>(radius * radius), matches, nanoflann::SearchParams(32, 0, true));
   if (max_nn > 0 && matches.size() > max_nn) matches.resize(max_nn);  // nearest first: keep the closest
   indices.reserve(matches.size());
   sq_dists.reserve(matches.size());
   for (const auto& [i, d] : matches) {
-    indices.push_back(impl_->points.id[i]);
+    indices.push_back(impl_->points.id[static_cast<std::size_t>(i)]);
     sq_dists.push_back(d);
   }
   return static_cast<int>(indices.size());
@@ -108,7 +109,7 @@ int PointIndex<PointT>::radius(const float* query, double radius, pcl::Indices& 
 template <class PointT>
 float PointIndex<PointT>::nearest_sq(const float* query) const {
   if (!impl_->tree || size() == 0 || !finite3(query)) return std::numeric_limits<float>::infinity();
-  std::uint32_t i = 0;
+  pcl::index_t i = 0;
   float d = std::numeric_limits<float>::infinity();
   impl_->tree->knnSearch(query, 1, &i, &d);
   return d;

@@ -4,7 +4,7 @@
 // Why not PCL's own KdTree: Debian's PCL searches through FLANN, and FLANN opens an OpenMP
 // parallel region for every single-point query. Ending a region costs a futex syscall even with
 // one thread, and PCL queries one point at a time (normal estimation, generalized ICP, the
-// outlier filter): 5.6 million syscalls for the plate scan, a third of its run time on a VM where
+// outlier filter): 5.6 million syscalls for the plate scan, 40 % of its run time on a VM where
 // syscalls are slow. nanoflann answers the same exact queries with no threading of its own, so
 // callers parallelise over queries where it pays.
 #include <memory>
@@ -42,8 +42,9 @@ class PointIndex {
 };
 
 /// PointIndex behind PCL's search interface, for PCL's algorithms that take a search method
-/// (NormalEstimation, GeneralizedIterativeClosestPoint, StatisticalOutlierRemoval): same answers
-/// as pcl::search::KdTree (exact, sorted), no OpenMP region per query.
+/// (normal estimation, generalized ICP, FPFH, SampleConsensusPrerejective, MLS, greedy
+/// projection): same answers as pcl::search::KdTree (exact, sorted), no OpenMP region per query.
+/// (PCL's StatisticalOutlierRemoval takes none: see remove_statistical_outliers.)
 template <class PointT>
 class NanoSearch : public pcl::search::KdTree<PointT> {
  public:

@@ -1,8 +1,8 @@
 // Reading every kind of reconstruct input into views (sensor-frame points + recorded pose).
 #include <algorithm>
 #include <cmath>
-#include <regex>
 #include <exception>
+#include <regex>
 #include <sstream>
 
 #include <fmt/format.h>

@@ -314,6 +314,7 @@ Mesh mesh_cloud(const OrientedCloud& in, const ReconstructOptions& o, Reconstruc
   rep.trim_mm = o.trim_mm > 0 ? o.trim_mm : 3.0 * spacing;
   const PointIndex<pcl::PointNormal> tree(*cloud);
   std::vector<char> keep(verts.size(), 0);
+  // Compared as a float distance against the trim, as always, so vertices on the border stay put.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, verts.size(), 4096), [&](const auto& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) keep[i] = std::sqrt(tree.nearest_sq(verts[i].data)) <= rep.trim_mm;
   });
