@@ -17,6 +17,10 @@
 # THRESHOLD=0.25, O3D_DEPTH=9, RECON_ARGS="" (extra arguments for scan2cad reconstruct),
 # BUNNY_ARGS="" (arguments for build/bin/s2c-bench-bunny, run when it exists).
 set -uo pipefail
+# The environment `scan2cad` gives its stages (README, "Using it": transparent huge pages for
+# malloc), for ours and the peers alike.
+[[ "${GLIBC_TUNABLES:-}" == *glibc.malloc.hugetlb* ]] ||
+  export GLIBC_TUNABLES="${GLIBC_TUNABLES:+$GLIBC_TUNABLES:}glibc.malloc.hugetlb=1"
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
 build="${1:-build}"
