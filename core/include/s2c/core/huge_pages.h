@@ -11,7 +11,7 @@ namespace s2c {
 ///
 /// Why: the stages allocate hundreds of MB in many steps (PCL's Poisson octree, point and mesh
 /// arrays), and on the benchmark VM every 4 KB page fault is a trip through the hypervisor. With
-/// 2 MB pages the same runs are 5-30 % faster with byte-identical outputs and 1-3 % more peak
+/// 2 MB pages the same runs take 7-22 % less CPU, with byte-identical outputs and 1-3 % more peak
 /// memory (bench/README.md, "Huge pages").
 void request_huge_pages_for_children();
 
