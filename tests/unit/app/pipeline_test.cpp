@@ -1,5 +1,5 @@
 // The scan2cad run driver: manifest, skipping up-to-date stages, re-running after changes,
-// stopping cleanly on failure.
+// stopping cleanly on failure; and the environment the `scan2cad` dispatcher gives the stages.
 #include <cstdlib>
 #include <fstream>
 
@@ -107,4 +107,25 @@ TEST(Pipeline, HashOfADirectoryChangesWithAnyFile) {
   EXPECT_EQ(h1, app::hash_path(dir / "d"));
   test::write_text(dir / "d/sub/b", "3");
   EXPECT_NE(h1, app::hash_path(dir / "d"));
+}
+
+// The dispatcher hands the huge-pages tunable to the stage it starts (s2c/core/huge_pages.h): a
+// copy of `scan2cad` next to a shell "stage" that prints what it was given.
+TEST(Dispatcher, StagesInheritTheHugePagesTunable) {
+  const auto dir = test::scratch_dir();
+  fs::copy_file(test::bin_dir() / "scan2cad", dir / "scan2cad");
+  const fs::path stage = dir / "scan2cad-env";
+  test::write_text(stage, "#!/bin/sh\nprintf '%s' \"$GLIBC_TUNABLES\" > \"$1\"\n");
+  fs::permissions(stage, fs::perms::owner_all, fs::perm_options::add);
+  const auto seen = [&](const std::string& env) {
+    const fs::path out = dir / "seen.txt";
+    fs::remove(out);
+    const std::string cmd = env + " " + (dir / "scan2cad").string() + " env " + out.string();
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    std::ifstream f(out);
+    return std::string(std::istreambuf_iterator<char>(f), {});
+  };
+  EXPECT_EQ(seen("env -u GLIBC_TUNABLES"), "glibc.malloc.hugetlb=1");
+  EXPECT_EQ(seen("GLIBC_TUNABLES=glibc.malloc.arena_max=2"), "glibc.malloc.arena_max=2:glibc.malloc.hugetlb=1");
+  EXPECT_EQ(seen("GLIBC_TUNABLES=glibc.malloc.hugetlb=0"), "glibc.malloc.hugetlb=0");
 }
