@@ -537,12 +537,12 @@ int main(int argc, char** argv) {
   }
 #ifdef S2C_HAVE_CGAL
   std::printf("CGAL %s: triangulate_refine_and_fair_hole with default parameters\n", CGAL_VERSION_STR);
-  std::printf("Timing: best of %d, %s\n", g_repeats,
-              g_cold ? "caches flushed before every timed call on both sides (--cold)"
-                     : "repetitions back to back on both sides (warm caches)");
 #else
   std::printf("CGAL not found: no comparison column\n");
 #endif
+  std::printf("Timing: best of %d, %s\n", g_repeats,
+              g_cold ? "caches flushed before every timed call on both sides (--cold)"
+                     : "repetitions back to back on both sides (warm caches)");
   struct Shape {
     const char* name;
     TriangleSoup soup;

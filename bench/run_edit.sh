@@ -20,10 +20,7 @@
 #            edit added), and scan2cad check
 # Environment: OUT=DIR (default: a new /tmp directory), VERTICES=50000,1000000, STEPS=20.
 set -uo pipefail
-# The environment `scan2cad` gives its stages (README, "Using it": transparent huge pages for
-# malloc), for ours and the peers alike.
-[[ "${GLIBC_TUNABLES:-}" == *glibc.malloc.hugetlb* ]] ||
-  export GLIBC_TUNABLES="${GLIBC_TUNABLES:+$GLIBC_TUNABLES:}glibc.malloc.hugetlb=1"
+source "$(dirname "$0")/huge_pages_env.sh"
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root" || exit 2
 build="${1:-build}"

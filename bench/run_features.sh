@@ -28,10 +28,7 @@
 # SCANS="plate shaft bracket pocket shaft_laser", SIGMAS=0,0.1,0.2,0.3, DIV=100, SEED=1,
 # SAMPLES=100000, RUNS=3, VERTICES=1000000, TIMEOUT=1800.
 set -uo pipefail
-# The environment `scan2cad` gives its stages (README, "Using it": transparent huge pages for
-# malloc), for ours and the peers alike.
-[[ "${GLIBC_TUNABLES:-}" == *glibc.malloc.hugetlb* ]] ||
-  export GLIBC_TUNABLES="${GLIBC_TUNABLES:+$GLIBC_TUNABLES:}glibc.malloc.hugetlb=1"
+source "$(dirname "$0")/huge_pages_env.sh"
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root" || exit 2
 build="${1:-build}"

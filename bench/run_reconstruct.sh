@@ -17,10 +17,7 @@
 # THRESHOLD=0.25, O3D_DEPTH=9, RECON_ARGS="" (extra arguments for scan2cad reconstruct),
 # BUNNY_ARGS="" (arguments for build/bin/s2c-bench-bunny, run when it exists).
 set -uo pipefail
-# The environment `scan2cad` gives its stages (README, "Using it": transparent huge pages for
-# malloc), for ours and the peers alike.
-[[ "${GLIBC_TUNABLES:-}" == *glibc.malloc.hugetlb* ]] ||
-  export GLIBC_TUNABLES="${GLIBC_TUNABLES:+$GLIBC_TUNABLES:}glibc.malloc.hugetlb=1"
+source "$(dirname "$0")/huge_pages_env.sh"
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
 build="${1:-build}"

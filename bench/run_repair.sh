@@ -25,10 +25,7 @@
 # cgal_part, abc_*), MEMORY_INPUTS (default: bracket.stl and abc_00000009, the widest band at
 # --div 256), REAL=../shared/data/real/cad.
 set -uo pipefail
-# The environment `scan2cad` gives its stages (README, "Using it": transparent huge pages for
-# malloc), for ours and the peers alike.
-[[ "${GLIBC_TUNABLES:-}" == *glibc.malloc.hugetlb* ]] ||
-  export GLIBC_TUNABLES="${GLIBC_TUNABLES:+$GLIBC_TUNABLES:}glibc.malloc.hugetlb=1"
+source "$(dirname "$0")/huge_pages_env.sh"
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root" || exit 2
 build="${1:-build}"

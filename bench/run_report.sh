@@ -9,10 +9,7 @@
 # the true plate as reference; then times scan2cad render on its meshes and cloud and on a real
 # mesh (the Stanford bunny zipper scan), and the report stage alone. Environment: OUT=DIR.
 set -euo pipefail
-# The environment `scan2cad` gives its stages (README, "Using it": transparent huge pages for
-# malloc), for ours and the peers alike.
-[[ "${GLIBC_TUNABLES:-}" == *glibc.malloc.hugetlb* ]] ||
-  export GLIBC_TUNABLES="${GLIBC_TUNABLES:+$GLIBC_TUNABLES:}glibc.malloc.hugetlb=1"
+source "$(dirname "$0")/huge_pages_env.sh"
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
 build="${1:-build}"
