@@ -36,7 +36,6 @@ const char* to_string(FillMethod m) {
 constexpr double kPi = 3.14159265358979323846;
 
 namespace fill {
-
 HoleShape analyse_rim(const TriangleSoup& soup, const MeshIndex& index, const std::vector<int>& loop, double edge_length,
                       double planar_tolerance) {
   HoleShape s;
@@ -270,7 +269,7 @@ Plan plan_hole(const TriangleSoup& soup, const MeshIndex& index, const Hole& hol
   }
   plan.second = plan.first == FillMethod::rbf ? FillMethod::liepa : FillMethod::rbf;
   build(soup, index, loop, shape, options, plan.first, plan.candidates, plan.why, r, plan.rbf_note);
-  if (checked) validate(soup, index, plan);  // against the soup as it is (read only)
+  if (checked) validate(soup, index, plan);
   return plan;
 }
 
@@ -487,10 +486,9 @@ FillResult fill_loop(TriangleSoup& soup, MeshIndex& index, const Hole& hole, con
   return r;
 }
 
-}  // namespace
-
-std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& holes, const FillOptions& options) {
-  MeshIndex index(soup);
+// fill_holes against an index of `soup` (built for the call, or held by a HoleFiller).
+std::vector<FillResult> fill_with(TriangleSoup& soup, MeshIndex& index, const std::vector<Hole>& holes,
+                                  const FillOptions& options) {
   std::vector<FillResult> results(holes.size());
   std::vector<double> seconds(holes.size(), 0);
   const auto t_pair = std::chrono::steady_clock::now();
@@ -521,10 +519,15 @@ std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& 
     });
   };
   const auto plan_unchecked = [&](std::size_t h) { plans[h] = plan_hole(soup, index, holes[h], options, false); };
-  // Up to two holes each validation scans vertices and faces once; more share block boxes.
+  // Up to two holes each validation scans vertices and faces once; more share block boxes
+  // (a HoleFiller's index has them already: then only boxes for faces appended since are built).
   constexpr std::size_t kScanHoles = 2;
-  if (simple.size() > kScanHoles) index.use_blocks();  // before the plans, which ask scanning()
-  tbb::parallel_invoke([&] { if (simple.size() > kScanHoles) index.prepare_boxes(); }, [&] { over_simple(plan_unchecked); });
+  const bool blocks = !index.scanning() || simple.size() > kScanHoles;
+  if (blocks) index.use_blocks();  // before the plans, which ask scanning()
+  if (blocks && !index.boxes_ready())
+    tbb::parallel_invoke([&] { index.prepare_boxes(); }, [&] { over_simple(plan_unchecked); });
+  else
+    over_simple(plan_unchecked);
   over_simple([&](std::size_t h) {
     validate(soup, index, plans[h]);
     planned[h] = 1;
@@ -564,6 +567,38 @@ std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& 
       if (!r.filled) r.reason = "filled with hole " + std::to_string(into) + ", which failed";
     }
   for (std::size_t h = 0; h < holes.size(); ++h) results[h].seconds = seconds[h] + pair_seconds / double(holes.size());
+  return results;
+}
+
+}  // namespace
+
+std::vector<FillResult> fill_holes(TriangleSoup& soup, const std::vector<Hole>& holes, const FillOptions& options) {
+  MeshIndex index(soup);
+  return fill_with(soup, index, holes, options);
+}
+
+HoleFiller::HoleFiller(TriangleSoup& soup) : soup_(soup) { index(); }
+
+HoleFiller::~HoleFiller() = default;
+
+void HoleFiller::index() {
+  index_ = std::make_unique<MeshIndex>(soup_);
+  index_->use_blocks();
+  index_->prepare_boxes();
+  faces_ = soup_.faces.size();
+  vertices_ = soup_.vertices.size();
+}
+
+std::vector<FillResult> HoleFiller::fill(const std::vector<Hole>& holes, const FillOptions& options) {
+  if (soup_.faces.size() < faces_ || soup_.vertices.size() < vertices_) {
+    index();  // not an append: index the soup as it is now
+  } else if (soup_.faces.size() > faces_) {
+    index_->add_faces(faces_);  // appended since the last call
+    index_->prepare_boxes();
+  }
+  std::vector<FillResult> results = fill_with(soup_, *index_, holes, options);
+  faces_ = soup_.faces.size();
+  vertices_ = soup_.vertices.size();
   return results;
 }
 

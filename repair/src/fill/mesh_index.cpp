@@ -164,7 +164,11 @@ void MeshIndex::scan_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, 
 void MeshIndex::add_faces(std::size_t first) {
   for (std::size_t f = first; f < soup_.faces.size(); ++f) {
     if (!valid_face(soup_, f)) continue;
-    for (int c : soup_.faces[f]) added_vertex_faces_[c].push_back(static_cast<int>(f));
+    for (int c : soup_.faces[f]) {
+      added_vertex_faces_[c].push_back(static_cast<int>(f));
+      if (static_cast<std::size_t>(c) >= has_added_.size()) has_added_.resize(soup_.vertices.size(), 0);
+      has_added_[static_cast<std::size_t>(c)] = 1;
+    }
   }
 }
 

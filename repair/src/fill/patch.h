@@ -42,7 +42,8 @@ class MeshIndex {
   void for_each_face_of(int v, Visit&& visit) const {
     if (v >= 0 && static_cast<std::size_t>(v) + 1 < vf_offset_.size())
       for (int i = vf_offset_[v]; i < vf_offset_[v + 1]; ++i) visit(vf_faces_[static_cast<std::size_t>(i)]);
-    if (added_vertex_faces_.empty()) return;  // (no hashing while holes are planned)
+    // Most vertices have no appended faces: a byte per vertex says so without hashing.
+    if (v < 0 || static_cast<std::size_t>(v) >= has_added_.size() || !has_added_[static_cast<std::size_t>(v)]) return;
     const auto it = added_vertex_faces_.find(v);
     if (it != added_vertex_faces_.end())
       for (int f : it->second) visit(f);
@@ -76,6 +77,8 @@ class MeshIndex {
   /// asks scanning(); then prepare_boxes() builds the boxes (O(#F)) while the holes are planned.
   void use_blocks() const { use_blocks_ = true; }
   void prepare_boxes() const { extend_boxes(); }
+  /// Whether every face has its block box (prepare_boxes would do nothing).
+  bool boxes_ready() const { return boxed_ >= soup_.faces.size(); }
   /// Whether faces_near scans vertices and faces (no block boxes): then a query costs O(#V + #F).
   bool scanning() const { return !use_blocks_; }
 
@@ -85,6 +88,7 @@ class MeshIndex {
   const TriangleSoup& soup_;
   std::vector<int> vf_offset_, vf_faces_;                // the input's vertex → faces (CSR)
   std::unordered_map<int, std::vector<int>> added_vertex_faces_;
+  std::vector<std::uint8_t> has_added_;                  // v has appended faces (a key above)
   static constexpr std::size_t kBlock = 32;
   struct Box {
     Eigen::Vector3f lo, hi;  // rounded outwards; NaN when a corner is not finite

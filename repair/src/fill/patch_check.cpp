@@ -153,6 +153,66 @@ bool appended_faces_touch_rim(const TriangleSoup& soup, const Patch& p, std::siz
   return false;
 }
 
+}  // namespace
+
+bool patch_embeds_by_projection(const Patch& p) {
+  const int n = p.rim_size();
+  if (n < 3 || n > 256 || p.faces.empty()) return false;
+  // The boundary: every directed patch edge is matched by its reverse or is a rim edge.
+  std::vector<std::uint64_t> directed;
+  directed.reserve(3 * p.faces.size());
+  for (const auto& t : p.faces)
+    for (int k = 0; k < 3; ++k) directed.push_back(directed_key(t[k], t[(k + 1) % 3]));
+  std::sort(directed.begin(), directed.end());
+  if (std::adjacent_find(directed.begin(), directed.end()) != directed.end()) return false;
+  const auto has = [&](int a, int b) { return std::binary_search(directed.begin(), directed.end(), directed_key(a, b)); };
+  int forward = 0, backward = 0;  // rim edges the patch holds as l → l+1, and as l+1 → l
+  for (int l = 0; l < n; ++l) {
+    const int m = (l + 1) % n;
+    forward += has(l, m) && !has(m, l);
+    backward += has(m, l) && !has(l, m);
+  }
+  if (!(forward == n || backward == n)) return false;
+  std::size_t boundary = 0;
+  for (const std::uint64_t e : directed) {
+    const int a = static_cast<int>(e >> 32), b = static_cast<int>(e & 0xffffffffu);
+    boundary += !has(b, a);
+  }
+  if (boundary != static_cast<std::size_t>(n)) return false;
+  // Project along the axis where the patch's area vector is largest.
+  Eigen::Vector3d area = Eigen::Vector3d::Zero();
+  for (const auto& t : p.faces) area += (p.points[t[1]] - p.points[t[0]]).cross(p.points[t[2]] - p.points[t[0]]);
+  int drop = 0;
+  area.cwiseAbs().maxCoeff(&drop);
+  const int u = (drop + 1) % 3, w = (drop + 2) % 3;
+  const auto flat = [&](int l) { return Eigen::Vector2d(p.points[l][u], p.points[l][w]); };
+  int sign = 0;
+  for (const auto& t : p.faces) {
+    const int o = orient2d(flat(t[0]), flat(t[1]), flat(t[2]));
+    if (o == 0 || (sign != 0 && o != sign)) return false;
+    sign = o;
+  }
+  // The rim polygon is simple: no two of its segments meet but consecutive ones at their common
+  // end (and those not along one line). Boxes first, exact orientations for the pairs left.
+  std::vector<Eigen::Vector2d> q(static_cast<std::size_t>(n));
+  for (int l = 0; l < n; ++l) q[l] = flat(l);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector2d &a = q[i], &b = q[(i + 1) % n];
+    if (orient2d(q[(i + n - 1) % n], a, b) == 0) return false;  // consecutive segments along one line
+    const Eigen::Vector2d lo = a.cwiseMin(b), hi = a.cwiseMax(b);
+    for (int j = i + 2; j < n; ++j) {
+      if (i == 0 && j == n - 1) continue;  // consecutive through the loop's end
+      const Eigen::Vector2d &c = q[j], &d = q[(j + 1) % n];
+      if ((c.cwiseMax(d).array() < lo.array()).any() || (c.cwiseMin(d).array() > hi.array()).any()) continue;
+      const int o1 = orient2d(a, b, c), o2 = orient2d(a, b, d), o3 = orient2d(c, d, a), o4 = orient2d(c, d, b);
+      if (o1 * o2 <= 0 && o3 * o4 <= 0) return false;  // they meet (or touch, or are collinear)
+    }
+  }
+  return true;
+}
+
+namespace {
+
 struct Box {
   Eigen::Vector3d lo, hi;
 };
@@ -224,7 +284,7 @@ std::string check_patch(const TriangleSoup& soup, const MeshIndex& index, const 
     }
     return -1;
   };
-  if (scope.patch_itself)
+  if (scope.patch_itself && !patch_embeds_by_projection(p))
     for (int f = 0; f < static_cast<int>(tri.size()); ++f)
       if (against_patch(tri[f], ids[f], boxes[f], f) >= 0) return "patch intersects itself";
   for (const int f : near) {

@@ -29,4 +29,16 @@ std::string check_patch(const TriangleSoup& soup, const MeshIndex& index, const 
 /// can run while something else still moves the points (the RBF fill's fit).
 std::string check_patch_topology(const TriangleSoup& soup, const MeshIndex& index, const Patch& patch);
 
+/// Whether no two faces of the patch intersect (beyond the edges and vertices they share),
+/// shown without testing pairs: a sufficient condition that check_patch tries before its pair
+/// test. Dropping a coordinate (the patch's dominant normal axis) is exact, so every test is
+/// exact. The argument: the patch's faces are an oriented surface whose boundary is exactly the
+/// rim loop (every directed edge has its reverse in the patch or is a rim edge, all rim edges
+/// the same way round). If every face projects to a triangle of one orientation sign and the rim
+/// projects to a simple polygon, a generic point of the plane has as many preimages as the
+/// polygon winds around it, 0 or 1: the projection is one-to-one, so the faces meet only where
+/// they share edges and vertices. False whenever that is not shown (a rim over 256 vertices, a
+/// repeated rim vertex, a patch that folds over in every axis projection, ...).
+bool patch_embeds_by_projection(const Patch& patch);
+
 }  // namespace s2c::repair::fill

@@ -12,6 +12,7 @@
 #include <tbb/global_control.h>
 
 #include "s2c/core/check.h"
+#include "s2c/core/predicates.h"
 #include "s2c/repair/fill.h"
 #include "../test_util.h"
 #include "fill/liepa.h"
@@ -610,6 +611,81 @@ TEST(Fill, SeveralHolesInOneCallAndNormalsKept) {
 
 
 // ---------------------------------------------------------------------------------------------
+// HoleFiller: one index over several calls
+
+// Three holes around a sphere, far apart.
+TriangleSoup sphere_with_three_holes() {
+  return cut_faces(test::icosphere({0, 0, 0}, 10, 3), [](const Eigen::Vector3d& c) {
+    return (c - Eigen::Vector3d(0, 0, 10)).norm() < 3.5 || (c - Eigen::Vector3d(10, 0, 0)).norm() < 2.5 ||
+           (c - Eigen::Vector3d(0, -10, 0)).norm() < 4;
+  });
+}
+
+void expect_same_soup(const TriangleSoup& a, const TriangleSoup& b) {
+  ASSERT_EQ(a.vertices.size(), b.vertices.size());
+  ASSERT_EQ(a.faces, b.faces);
+  for (std::size_t v = 0; v < a.vertices.size(); ++v) ASSERT_EQ(a.vertices[v], b.vertices[v]) << v;
+}
+
+TEST(HoleFiller, HoleByHoleGivesWhatAFreshIndexGivesEachTime) {
+  // The filler's index is built once and extended by its own patches; fill_holes builds one per
+  // call. Filling the holes one call each must give the same mesh either way.
+  TriangleSoup a = sphere_with_three_holes();
+  TriangleSoup b = a;
+  const auto holes = trace_holes(a);
+  ASSERT_EQ(holes.size(), 3u);
+  HoleFiller filler(a);
+  for (const Hole& h : holes) {
+    const auto ra = filler.fill({h});
+    const auto rb = fill_holes(b, {h});
+    ASSERT_TRUE(ra[0].filled) << ra[0].reason;
+    EXPECT_EQ(ra[0].choice, rb[0].choice);
+    expect_same_soup(a, b);
+  }
+  expect_cad_ready(a);
+}
+
+TEST(HoleFiller, FacesAppendedBetweenCallsAreSeen) {
+  // After the filler was made, the caller appends a flap on the hole's first rim edge, on the
+  // hole's side: a patch there would give that edge a third face. The filler must know the flap
+  // (its adjacency, not only its position), as a fresh index does: same result, same mesh.
+  TriangleSoup a = cut_faces(height_grid(10, [](double, double) { return 0.0; }), [](const Eigen::Vector3d& c) {
+    return c.x() > 3 && c.x() < 7 && c.y() > 3 && c.y() < 7;
+  });
+  const auto holes = grid_hole(a);
+  HoleFiller filler(a);
+  const int u = holes[0].loop[0], w = holes[0].loop[1], apex = static_cast<int>(a.vertices.size());
+  a.vertices.push_back((a.vertices[u] + a.vertices[w]) / 2 + Eigen::Vector3d(0, 0, 2));
+  a.faces.push_back({u, w, apex});
+  TriangleSoup b = a;
+  const auto ra = filler.fill(holes);
+  const auto rb = fill_holes(b, holes);
+  EXPECT_EQ(ra[0].filled, rb[0].filled);
+  EXPECT_EQ(ra[0].reason, rb[0].reason);
+  EXPECT_EQ(ra[0].choice, rb[0].choice);
+  expect_same_soup(a, b);
+}
+
+TEST(HoleFiller, ASoupThatShrankIsIndexedAnew) {
+  // Faces removed between calls (a new hole cut after a fill): the filler indexes the soup again
+  // and fills the new hole as fill_holes does.
+  TriangleSoup a = sphere_with_three_holes();
+  auto holes = trace_holes(a);
+  ASSERT_EQ(holes.size(), 3u);
+  HoleFiller filler(a);
+  ASSERT_TRUE(filler.fill(holes)[0].filled);
+  a = cut_faces(a, [](const Eigen::Vector3d& c) { return (c - Eigen::Vector3d(0, 10, 0)).norm() < 3; });
+  TriangleSoup b = a;
+  holes = trace_holes(a);
+  ASSERT_EQ(holes.size(), 1u);
+  const auto ra = filler.fill(holes);
+  fill_holes(b, holes);
+  ASSERT_TRUE(ra[0].filled) << ra[0].reason;
+  expect_same_soup(a, b);
+  expect_cad_ready(a);
+}
+
+// ---------------------------------------------------------------------------------------------
 // Shared and pinched rim vertices (real scans: cgal_ALSTOM_TEST4, stanford_bun_zipper_res3,
 // thingi10k_74450)
 
@@ -873,6 +949,61 @@ TEST(Fill, PatchCheckUsesEarlyResultsOnlyWhereTheyHold) {
   twisted.topology_ok = false;
   std::swap(twisted.faces[0][0], twisted.faces[0][1]);
   EXPECT_NE(fill::check_patch(s, index, twisted), "");
+}
+
+TEST(Fill, PatchEmbeddedByProjectionOnlyWhenNoFacesIntersect) {
+  // check_patch skips its pair test when the patch's projection proves it embedded. Fans over a
+  // jittered rim with the apex anywhere (inside or outside the rim, above or below it): whenever
+  // the projection says embedded, no pair of faces may intersect (exact pair test). Both answers
+  // must occur, so that the comparison means something.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  int embedded = 0, intersecting = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    fill::Patch p;
+    const int n = 5 + trial % 12;
+    // Every fourth rim winds twice around the apex (a spiral staircase when it climbs, two
+    // overlapping fans when flat): every face projects the same way round, yet the projection
+    // is not one-to-one, which only the rim's simplicity test can tell.
+    const bool twice = trial % 4 == 3 && n >= 8, climbs = trial % 8 == 7;
+    for (int i = 0; i < n; ++i) {
+      const double a = (twice ? 4 : 2) * M_PI * (i + 0.4 * unit(rng)) / n, r = 1 + 0.6 * unit(rng);
+      p.rim.push_back(i);
+      p.points.push_back({r * std::cos(a), r * std::sin(a), twice ? (climbs ? 0.2 * i : 0.0) : 0.3 * unit(rng)});
+    }
+    p.base = n;
+    if (twice)
+      p.points.push_back({0.05 * unit(rng), 0.05 * unit(rng), climbs ? 0.1 * n : 0.0});
+    else
+      p.points.push_back({1.5 * unit(rng), 1.5 * unit(rng), unit(rng)});
+    for (int i = 0; i < n; ++i) p.faces.push_back({i, (i + 1) % n, n});
+    bool any = false;
+    for (std::size_t f = 0; f < p.faces.size() && !any; ++f)
+      for (std::size_t g = f + 1; g < p.faces.size() && !any; ++g) {
+        const auto tri = [&](std::size_t k) {
+          return std::array<Eigen::Vector3d, 3>{p.points[p.faces[k][0]], p.points[p.faces[k][1]], p.points[p.faces[k][2]]};
+        };
+        any = faces_self_intersect(tri(f), p.faces[f], tri(g), p.faces[g]);
+      }
+    const bool shown = fill::patch_embeds_by_projection(p);
+    if (shown) EXPECT_FALSE(any) << "trial " << trial;
+    embedded += shown;
+    intersecting += any;
+  }
+  EXPECT_GT(embedded, 40);
+  EXPECT_GT(intersecting, 20);
+  // A loop whose faces are not bounded by the rim alone (a face missing) is never shown.
+  fill::Patch open;
+  for (int i = 0; i < 6; ++i) {
+    open.rim.push_back(i);
+    open.points.push_back({std::cos(i * M_PI / 3), std::sin(i * M_PI / 3), 0});
+  }
+  open.base = 6;
+  open.points.push_back({0, 0, 0});
+  for (int i = 0; i < 5; ++i) open.faces.push_back({i, i + 1, 6});
+  EXPECT_FALSE(fill::patch_embeds_by_projection(open));
+  open.faces.push_back({5, 0, 6});
+  EXPECT_TRUE(fill::patch_embeds_by_projection(open));
 }
 
 }  // namespace
