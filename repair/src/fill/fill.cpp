@@ -36,6 +36,7 @@ const char* to_string(FillMethod m) {
 constexpr double kPi = 3.14159265358979323846;
 
 namespace fill {
+
 HoleShape analyse_rim(const TriangleSoup& soup, const MeshIndex& index, const std::vector<int>& loop, double edge_length,
                       double planar_tolerance) {
   HoleShape s;
@@ -269,7 +270,7 @@ Plan plan_hole(const TriangleSoup& soup, const MeshIndex& index, const Hole& hol
   }
   plan.second = plan.first == FillMethod::rbf ? FillMethod::liepa : FillMethod::rbf;
   build(soup, index, loop, shape, options, plan.first, plan.candidates, plan.why, r, plan.rbf_note);
-  if (checked) validate(soup, index, plan);
+  if (checked) validate(soup, index, plan);  // against the soup as it is (read only)
   return plan;
 }
 
