@@ -434,9 +434,18 @@ bool fit_pieces(const CreaseSplit& split, const Position& at, const std::vector<
     ok[k] = combined.surfaces[k].fit(points, normals, options.rbf_offset * shape.edge, cover, options.rbf_local_limit,
                                      whys[k]);
   };
+  // Largest first (the solve is cubic in the centres): the calling thread takes the front of
+  // the range and a thread that comes free steals from the back, so the other core, once done
+  // with its half of the hole (the initial patch), picks up the small pieces instead of leaving
+  // the largest to start last. Each piece writes its own slot: the order changes no result.
+  std::vector<std::size_t> order(count);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return split.pieces[a].vertices.size() > split.pieces[b].vertices.size();
+  });
   if (count > 1)
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1), [&](const auto& range) {
-      for (std::size_t k = range.begin(); k != range.end(); ++k) fit_one(k);
+      for (std::size_t k = range.begin(); k != range.end(); ++k) fit_one(order[k]);
     });
   else if (count == 1)
     fit_one(0);
