@@ -283,6 +283,8 @@ Shape classify(const Tri& t) {
 
 // ---- 2D tests (closed sets) ------------------------------------------------------------
 
+}  // namespace
+
 bool segments_intersect_2d(const V2& a, const V2& b, const V2& c, const V2& d) {
   const int o1 = orient2d(a, b, c), o2 = orient2d(a, b, d);
   if (o1 != 0 && o1 == o2) return false;
@@ -298,6 +300,8 @@ bool segments_intersect_2d(const V2& a, const V2& b, const V2& c, const V2& d) {
   }
   return true;
 }
+
+namespace {
 
 // t must be non-degenerate (either orientation).
 bool point_in_triangle_2d(const V2& p, const V2& t0, const V2& t1, const V2& t2) {

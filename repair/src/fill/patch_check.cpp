@@ -193,7 +193,7 @@ bool patch_embeds_by_projection(const Patch& p) {
     sign = o;
   }
   // The rim polygon is simple: no two of its segments meet but consecutive ones at their common
-  // end (and those not along one line). Boxes first, exact orientations for the pairs left.
+  // end (and those not along one line). Boxes first, the exact test for the pairs left.
   std::vector<Eigen::Vector2d> q(static_cast<std::size_t>(n));
   for (int l = 0; l < n; ++l) q[l] = flat(l);
   for (int i = 0; i < n; ++i) {
@@ -204,8 +204,7 @@ bool patch_embeds_by_projection(const Patch& p) {
       if (i == 0 && j == n - 1) continue;  // consecutive through the loop's end
       const Eigen::Vector2d &c = q[j], &d = q[(j + 1) % n];
       if ((c.cwiseMax(d).array() < lo.array()).any() || (c.cwiseMin(d).array() > hi.array()).any()) continue;
-      const int o1 = orient2d(a, b, c), o2 = orient2d(a, b, d), o3 = orient2d(c, d, a), o4 = orient2d(c, d, b);
-      if (o1 * o2 <= 0 && o3 * o4 <= 0) return false;  // they meet (or touch, or are collinear)
+      if (segments_intersect_2d(a, b, c, d)) return false;
     }
   }
   return true;

@@ -986,7 +986,9 @@ TEST(Fill, PatchEmbeddedByProjectionOnlyWhenNoFacesIntersect) {
         any = faces_self_intersect(tri(f), p.faces[f], tri(g), p.faces[g]);
       }
     const bool shown = fill::patch_embeds_by_projection(p);
-    if (shown) EXPECT_FALSE(any) << "trial " << trial;
+    if (shown) {
+      EXPECT_FALSE(any) << "trial " << trial;
+    }
     embedded += shown;
     intersecting += any;
   }

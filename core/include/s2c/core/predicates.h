@@ -30,6 +30,11 @@ int orient3d(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Ve
 /// Sign of det[b-a, c-a]: +1 when a, b, c turn counter-clockwise, -1 clockwise, 0 collinear. Exact.
 int orient2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c);
 
+/// True when the closed segments ab and cd share at least one point (a segment of two equal
+/// ends is that point). Exact.
+bool segments_intersect_2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
+                           const Eigen::Vector2d& d);
+
 /// True when the closed triangles t and u (boundary included) share at least one point. Exact.
 /// A degenerate triangle is treated as the point set it is: three coincident points are a
 /// point, three collinear points are the segment between the two extreme ones.
