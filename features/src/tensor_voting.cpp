@@ -31,18 +31,22 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
   // the area is capped at the area of the voting disc so one huge face cannot outvote the rest.
   const double disc = M_PI * radius * radius;
   struct Scratch {
-    std::vector<int> mark;
+    std::vector<int> mark;      // face f queued for the current vertex: mark[f] == vertex
+    std::vector<int> expanded;  // vertex u's faces queued: expanded[u] == vertex
     std::vector<int> queue;
   };
-  std::vector<double> reach(nf);
+  // Per face its centroid and the radius of the ball about it holding the triangle, side by
+  // side: the test that rejects most queued faces then reads one cache line, not two arrays.
+  std::vector<Eigen::Vector4d> ball(nf);
   tbb::parallel_for(tbb::blocked_range<int>(0, nf, 4096), [&](const tbb::blocked_range<int>& range) {
     for (int f = range.begin(); f < range.end(); ++f) {
       double r2 = 0;
       for (int u : m.tri[f]) r2 = std::max(r2, (m.pos[u] - m.centroid[f]).squaredNorm());
-      reach[f] = std::sqrt(r2);
+      ball[f] << m.centroid[f], std::sqrt(r2);
     }
   });
-  tbb::enumerable_thread_specific<Scratch> scratch([nf] { return Scratch{std::vector<int>(nf, -1), {}}; });
+  tbb::enumerable_thread_specific<Scratch> scratch(
+      [nf, nv] { return Scratch{std::vector<int>(nf, -1), std::vector<int>(nv, -1), {}}; });
   // Vertices in the order the faces first reach them: neighbours are then voted on one after the
   // other and share the faces in cache (vertex numbering often follows refinement levels).
   std::vector<int> order;
@@ -62,31 +66,38 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
       const Eigen::Vector3d p = m.pos[v];
       Eigen::Matrix3d T = Eigen::Matrix3d::Zero();
       s.queue.clear();
+      s.expanded[v] = v;
       for (int k = m.vf_start[v]; k < m.vf_start[v + 1]; ++k) {
         s.mark[m.vf[k]] = v;
         s.queue.push_back(m.vf[k]);
       }
+      const std::size_t incident_faces = s.queue.size();  // v's own faces come first
       for (std::size_t q = 0; q < s.queue.size(); ++q) {
         const int f = s.queue[q];
-        const auto& tri = m.tri[f];
-        const bool incident = tri[0] == v || tri[1] == v || tri[2] == v;
+        const bool incident = q < incident_faces;
         double d = 0.0;
         if (!incident) {
           // The triangle lies in the ball of radius reach[f] about its centroid: most faces of the
           // search's outer ring are out of reach by that bound alone, without the closest point.
-          if ((m.centroid[f] - p).norm() - reach[f] > radius * (1.0 + 1e-9)) continue;
+          if ((ball[f].head<3>() - p).norm() - ball[f][3] > radius * (1.0 + 1e-9)) continue;
+          const auto& tri = m.tri[f];
           d = (closest_point_on_triangle(p, m.pos[tri[0]], m.pos[tri[1]], m.pos[tri[2]]) - p).norm();
           if (d > radius) continue;
         }
         const double mu = std::min(m.farea[f], disc) / disc * (incident ? 1.0 : std::exp(-3.0 * d / radius));
         const Eigen::Vector3d& n = normals[f];
         T.noalias() += mu * n * n.transpose();
-        for (int u : tri)
+        // A vertex's faces are queued once: after that every one of them is marked, so a second
+        // pass over its list (up to three per vertex otherwise) would queue nothing.
+        for (int u : m.tri[f]) {
+          if (s.expanded[u] == v) continue;
+          s.expanded[u] = v;
           for (int k = m.vf_start[u]; k < m.vf_start[u + 1]; ++k)
             if (s.mark[m.vf[k]] != v) {
               s.mark[m.vf[k]] = v;
               s.queue.push_back(m.vf[k]);
             }
+        }
       }
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
       es.computeDirect(T);
