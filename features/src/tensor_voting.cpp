@@ -30,6 +30,9 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
   // the triangle (not to its centroid, which can be far away for a face touching the vertex), and
   // the area is capped at the area of the voting disc so one huge face cannot outvote the rest.
   const double disc = M_PI * radius * radius;
+  // Bounds with a margin over the radius for tests on squared distances: a face they reject is
+  // farther than the radius whatever the rounding, so the faces voting are exactly those within it.
+  const double far = radius * (1.0 + 1e-9), far2 = far * far * (1.0 + 1e-9);
   struct Scratch {
     std::vector<int> mark;      // face f queued for the current vertex: mark[f] == vertex
     std::vector<int> expanded;  // vertex u's faces queued: expanded[u] == vertex
@@ -77,11 +80,16 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
         const bool incident = q < incident_faces;
         double d = 0.0;
         if (!incident) {
-          // The triangle lies in the ball of radius reach[f] about its centroid: most faces of the
-          // search's outer ring are out of reach by that bound alone, without the closest point.
-          if ((ball[f].head<3>() - p).norm() - ball[f][3] > radius * (1.0 + 1e-9)) continue;
+          // The triangle lies in the ball of radius ball[f][3] about its centroid: most faces of
+          // the search's outer ring are out of reach by that bound alone, without the closest
+          // point. Compared squared, with a margin that keeps every face within reach: no square
+          // root on the path of every queued face.
+          const double beyond = (ball[f][3] + far) * (1.0 + 1e-9);
+          if ((ball[f].head<3>() - p).squaredNorm() > beyond * beyond) continue;
           const auto& tri = m.tri[f];
-          d = (closest_point_on_triangle(p, m.pos[tri[0]], m.pos[tri[1]], m.pos[tri[2]]) - p).norm();
+          const double d2 = (closest_point_on_triangle(p, m.pos[tri[0]], m.pos[tri[1]], m.pos[tri[2]]) - p).squaredNorm();
+          if (d2 > far2) continue;  // certainly beyond the radius: no square root either
+          d = std::sqrt(d2);
           if (d > radius) continue;
         }
         const double mu = std::min(m.farea[f], disc) / disc * (incident ? 1.0 : std::exp(-3.0 * d / radius));
