@@ -2,9 +2,13 @@
 // on real CAD meshes: primitives, feature lines and constraints, clean and noisy.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 #include <set>
 
+#include <Eigen/Eigenvalues>
+
+#include "s2c/core/distance.h"
 #include "s2c/core/io.h"
 #include "s2c/core/disjoint_sets.h"
 #include "s2c/features/analyze.h"
@@ -145,6 +149,55 @@ TEST(FeaturesReal, CgalFandiskHasPlanesCylindersAndLines) {
   EXPECT_GE(types[ShapeType::plane], 5);
   EXPECT_GE(types[ShapeType::cylinder] + types[ShapeType::cone], 2);
   EXPECT_GE(a.features.lines.size(), 10u);
+}
+
+/// Tensor voting's search (a breadth-first walk over faces, pruned by bounding balls and squared
+/// distances) must find exactly the faces within the radius: compared with a sum over every face.
+void expect_vote_matches_all_faces(const TriangleSoup& soup, double radius) {
+  Mesh mesh;
+  soup_to_mesh(soup, mesh);
+  const TriangleSoup s = mesh_to_soup(mesh);  // the mesh's own numbering
+  const std::vector<VertexTensor> got = vote_tensors(mesh, radius, 20.0, 0.0);
+  ASSERT_EQ(got.size(), s.vertices.size());
+  const double disc = M_PI * radius * radius;
+  int checked = 0;
+  for (std::size_t v = 0; v < s.vertices.size(); ++v) {
+    const Eigen::Vector3d& p = s.vertices[v];
+    Eigen::Matrix3d T = Eigen::Matrix3d::Zero();
+    for (const auto& t : s.faces) {
+      const Eigen::Vector3d& a = s.vertices[t[0]], & b = s.vertices[t[1]], & c = s.vertices[t[2]];
+      const Eigen::Vector3d cross = (b - a).cross(c - a);
+      if (!(cross.norm() > 0)) continue;
+      const bool incident = t[0] == int(v) || t[1] == int(v) || t[2] == int(v);
+      const double d = incident ? 0.0 : (closest_point_on_triangle(p, a, b, c) - p).norm();
+      if (d > radius) continue;
+      const Eigen::Vector3d n = cross.normalized();
+      T += std::min(0.5 * cross.norm(), disc) / disc * std::exp(-3.0 * d / radius) * n * n.transpose();
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+    es.computeDirect(T);
+    const Eigen::Vector3d ev = es.eigenvalues();
+    if (!(ev[2] > 0)) continue;
+    const Eigen::Vector3d lambda(1.0, std::max(ev[1], 0.0) / ev[2], std::max(ev[0], 0.0) / ev[2]);
+    EXPECT_NEAR(got[v].lambda[1], lambda[1], 1e-9) << "vertex " << v;
+    EXPECT_NEAR(got[v].lambda[2], lambda[2], 1e-9) << "vertex " << v;
+    ++checked;
+  }
+  EXPECT_GT(checked, 0);
+}
+
+TEST(TensorVoting, FindsExactlyTheFacesWithinTheRadius) {
+  // Long skinny CAD triangles (the plate's OpenSCAD export) and a jittered sphere, each with a
+  // radius of a few edges and one far beyond them.
+  const TriangleSoup plate = read_soup(test::source_dir() / "fixtures/parts/plate.stl");
+  expect_vote_matches_all_faces(plate, 1.5);
+  expect_vote_matches_all_faces(plate, 12.0);
+  TriangleSoup ball = test::icosphere(Eigen::Vector3d::Zero(), 5.0, 3);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> jitter(-0.05, 0.05);
+  for (auto& q : ball.vertices) q += Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng));
+  expect_vote_matches_all_faces(ball, 0.8);
+  expect_vote_matches_all_faces(ball, 2.5);
 }
 
 TEST(FeaturesInput, EmptyMeshIsRefused) {
