@@ -130,14 +130,13 @@ double levenberg_marquardt(Model& model, int max_iterations = kMaxIterations) {
     Vec g = Vec::Zero();
     for (int i = 0; i < m; ++i) {
       // Straight from the Jacobian's storage: a copy of the row to the stack was stored in two
-      // halves and read back across them, stalling every row on store forwarding.
-      const double* row = J.data() + static_cast<std::ptrdiff_t>(i) * k;
-      for (int c = 0; c < k; ++c) {
-        for (int q = c; q < k; ++q) A(q, c) += row[q] * row[c];
-        g[c] += row[c] * r[i];
-      }
+      // halves and read back across them, stalling every row on store forwarding. The whole
+      // outer product, in packets, rather than the lower triangle entry by entry: each entry
+      // still adds row[q]·row[c] in row order, so both triangles are the sums the lower one was.
+      const Eigen::Map<const Vec> row(J.data() + static_cast<std::ptrdiff_t>(i) * k);
+      A.noalias() += row * row.transpose();
+      g.noalias() += row * r[i];
     }
-    A.template triangularView<Eigen::StrictlyUpper>() = A.transpose();
     const double floor = 1e-12 * std::max(A.trace() / k, 1e-300);
     bool accepted = false, converged = false;
     while (lambda < 1e12) {
