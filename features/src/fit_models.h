@@ -3,6 +3,7 @@
 // cone), in a header of their own so the tests can check their analytic Jacobians against finite
 // differences.
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Dense>
 
@@ -53,13 +54,25 @@ template <int K>
 struct AxisModel {
   static constexpr int kParams = K;
   using Vec = Eigen::Matrix<double, K, 1>;
+  using Array = Eigen::ArrayXd;
   const Normalized* s;
   Vector3d a, p;
   double r, theta;
   Eigen::Matrix<double, 3, 2> uv;
 
   AxisModel(const Normalized& samples, const Vector3d& axis, const Vector3d& point, double radius, double angle)
-      : s(&samples), a(axis.normalized()), p(point), r(radius), theta(angle), uv(perpendicular_frame(a)) {}
+      : s(&samples), a(axis.normalized()), p(point), r(radius), theta(angle), uv(perpendicular_frame(a)) {
+    // The samples by coordinate: the passes below run two samples per instruction (each lane
+    // does the arithmetic the per-sample loop did, in the same order, so the values are equal).
+    const int m = samples.size();
+    x_.resize(m), y_.resize(m), z_.resize(m), sw_.resize(m);
+    for (int i = 0; i < m; ++i) {
+      x_[i] = samples.p[i].x();
+      y_[i] = samples.p[i].y();
+      z_[i] = samples.p[i].z();
+      sw_[i] = samples.sw[i];
+    }
+  }
 
   void moved(const Vec& d, Vector3d& a2, Vector3d& p2, double& r2, double& t2) const {
     a2 = tilt(a, uv, d[0], d[1]);
@@ -72,40 +85,61 @@ struct AxisModel {
     Vector3d a2, p2;
     double r2, t2;
     moved(d, a2, p2, r2, t2);
+    geometry(a2, p2);
     const double ct = std::cos(t2), st = std::sin(t2);
-    for (int i = 0; i < s->size(); ++i) {
-      const Vector3d v = s->p[i] - p2;
-      const double h = a2.dot(v);
-      const double rho = (v - h * a2).norm();
-      out[i] = s->sw[i] * ((rho - r2) * ct - h * st);
-    }
+    out.array() = sw_ * ((rho_ - r2) * ct - h_ * st);
+    last_ = d;
+    at_current_ = false;  // they are at the moved parameters until update(d) moves there
   }
   /// At delta = 0 the tilts move a along u and v (they are perpendicular to it), the shifts move p
   /// along them; with w = v − h a (length rho, perpendicular to a): ∂h/∂tilt_u = u·v,
   /// ∂rho/∂tilt_u = −h (w·u)/rho, ∂rho/∂shift_u = −(w·u)/rho, and the same for v.
   void jacobian(Jacobian<K>& J) const {
+    // After an accepted step the last residual pass was at exactly these parameters.
+    if (!at_current_) geometry(a, p);
     const double ct = std::cos(theta), st = std::sin(theta);
     const Vector3d u = uv.col(0), t = uv.col(1);
-    for (int i = 0; i < s->size(); ++i) {
-      const Vector3d v = s->p[i] - p;
-      const double h = a.dot(v);
-      const Vector3d w = v - h * a;
-      const double rho = w.norm();
-      // On the axis the distance is not differentiable; any direction is a subgradient.
-      const double wu = rho > 0 ? w.dot(u) / rho : 0.0, wt = rho > 0 ? w.dot(t) / rho : 0.0;
-      const double sw = s->sw[i];
-      J(i, 0) = sw * (-ct * h * wu - st * u.dot(v));
-      J(i, 1) = sw * (-ct * h * wt - st * t.dot(v));
-      J(i, 2) = -sw * ct * wu;
-      J(i, 3) = -sw * ct * wt;
-      J(i, 4) = -sw * ct;
-      if constexpr (K > 5) J(i, K - 1) = sw * (-(rho - r) * st - h * ct);
+    const auto vx = x_ - p.x(), vy = y_ - p.y(), vz = z_ - p.z();
+    // On the axis the distance is not differentiable; any direction is a subgradient.
+    const Array wu = (rho_ > 0).select(((wx_ * u.x() + wy_ * u.y()) + wz_ * u.z()) / rho_, 0.0);
+    const Array wt = (rho_ > 0).select(((wx_ * t.x() + wy_ * t.y()) + wz_ * t.z()) / rho_, 0.0);
+    const Array ud = (vx * u.x() + vy * u.y()) + vz * u.z(), td = (vx * t.x() + vy * t.y()) + vz * t.z();
+    const Array c0 = sw_ * ((-ct) * h_ * wu - st * ud), c1 = sw_ * ((-ct) * h_ * wt - st * td);
+    const Array c2 = (-sw_) * ct * wu, c3 = (-sw_) * ct * wt, c4 = (-sw_) * ct;
+    Array c5;
+    if constexpr (K > 5) c5 = sw_ * ((-(rho_ - r)) * st - h_ * ct);
+    for (Eigen::Index i = 0; i < x_.size(); ++i) {
+      J(i, 0) = c0[i];
+      J(i, 1) = c1[i];
+      J(i, 2) = c2[i];
+      J(i, 3) = c3[i];
+      J(i, 4) = c4[i];
+      if constexpr (K > 5) J(i, K - 1) = c5[i];
     }
   }
   void update(const Vec& d) {
     moved(d, a, p, r, theta);
     uv = perpendicular_frame(a);
+    at_current_ = d == last_;  // moved() gives the same a and p as that residual pass did
   }
+
+ private:
+  /// Per sample, for the axis through q along b: h = b·v and w = v − h b with v = sample − q,
+  /// rho = |w| (Eigen's 3-vector dot product and norm: (x + y) + z).
+  void geometry(const Vector3d& b, const Vector3d& q) const {
+    const auto vx = x_ - q.x(), vy = y_ - q.y(), vz = z_ - q.z();
+    h_ = (vx * b.x() + vy * b.y()) + vz * b.z();
+    wx_ = vx - h_ * b.x();
+    wy_ = vy - h_ * b.y();
+    wz_ = vz - h_ * b.z();
+    rho_ = ((wx_.square() + wy_.square()) + wz_.square()).sqrt();
+  }
+
+  Array x_, y_, z_, sw_;
+  // The last residual pass's geometry, reused by the Jacobian at the parameters it was for.
+  mutable Array h_, wx_, wy_, wz_, rho_;
+  mutable Vec last_ = Vec::Constant(std::numeric_limits<double>::quiet_NaN());
+  mutable bool at_current_ = false;
 };
 using CylinderModel = AxisModel<5>;
 using ConeModel = AxisModel<6>;
