@@ -227,6 +227,23 @@ Fit fit_sphere(const Samples& s) {
   return out;
 }
 
+namespace {
+
+/// The cylinder fit of `s` from a refined axis start (normalised coordinates).
+Fit cylinder_fit(const Samples& s, const Normalized& ns, const AxisStart& best) {
+  Fit out;
+  out.shape.type = ShapeType::cylinder;
+  if (!(best.r > 0)) return out;
+  const Vector3d foot = best.p - best.a * best.a.dot(best.p);  // nearest the centroid
+  out.shape.point = ns.to_world(foot);
+  out.shape.dir = best.a.normalized();
+  out.shape.radius = best.r * ns.scale;
+  fit::finish(out, s);
+  return out;
+}
+
+}  // namespace
+
 Fit fit_cylinder(const Samples& s) {
   Fit out;
   out.shape.type = ShapeType::cylinder;
@@ -238,29 +255,16 @@ Fit fit_cylinder(const Samples& s) {
     if (circle_start(ns, a, st)) starts.push_back(st);
   }
   AxisStart best;
-  if (starts.empty() || !refine_best<CylinderModel>(ns, starts, best) || !(best.r > 0)) return out;
-  const Vector3d foot = best.p - best.a * best.a.dot(best.p);  // nearest the centroid
-  out.shape.point = ns.to_world(foot);
-  out.shape.dir = best.a.normalized();
-  out.shape.radius = best.r * ns.scale;
-  fit::finish(out, s);
-  return out;
+  if (starts.empty() || !refine_best<CylinderModel>(ns, starts, best)) return out;
+  return cylinder_fit(s, ns, best);
 }
 
-Fit fit_cone(const Samples& s) {
+namespace {
+
+/// The cone fit of `s` from a refined axis start (normalised coordinates).
+Fit cone_fit(const Samples& s, const Normalized& ns, const AxisStart& best) {
   Fit out;
   out.shape.type = ShapeType::cone;
-  Normalized ns;
-  if (!fit::normalize(s, 6, ns)) return out;
-  std::vector<AxisStart> starts;
-  AxisStart st;
-  if (tangent_plane_cone_start(ns, st)) starts.push_back(st);
-  for (const Vector3d& a : candidate_axes(ns, true)) {
-    if (algebraic_cone_start(ns, a, st)) starts.push_back(st);
-    if (circle_start(ns, a, st)) starts.push_back(st);
-  }
-  AxisStart best;
-  if (starts.empty() || !refine_best<ConeModel>(ns, starts, best)) return out;
   // Half angle into [0, π/2): the line at theta ± π is the same line, at −theta it is the same
   // line seen along −a.
   Vector3d a = best.a.normalized();
@@ -280,6 +284,77 @@ Fit fit_cone(const Samples& s) {
   out.shape.half_angle_deg = theta * 180.0 / M_PI;
   fit::finish(out, s);
   return out;
+}
+
+/// The axis start of a fitted cylinder or cone in normalised coordinates: for a cone, the point
+/// on the axis level with the samples' centroid (the origin) and the radius there.
+bool axis_start_of(const Shape& shape, const Normalized& ns, AxisStart& out) {
+  const Vector3d a = shape.dir.normalized();
+  const Vector3d q = (shape.point - ns.center) / ns.scale;
+  if (shape.type == ShapeType::cylinder) {
+    out = {a, q, shape.radius / ns.scale, 0.0};
+  } else {
+    const double theta = shape.half_angle_deg * M_PI / 180.0;
+    const double height = -a.dot(q);  // the centroid above the apex
+    out = {a, q + height * a, height * std::tan(theta), theta};
+  }
+  return out.a.allFinite() && out.p.allFinite() && std::isfinite(out.r) && out.r > 0 && std::isfinite(out.theta);
+}
+
+/// One Levenberg–Marquardt run of the model from `start` on the refinement samples.
+template <class Model>
+bool refine_from(const Normalized& ns, AxisStart& start) {
+  Model m(ns, start.a, start.p, start.r, start.theta);
+  if (!std::isfinite(fit::levenberg_marquardt(m))) return false;
+  start = {m.a, m.p, m.r, m.theta};
+  return start.a.allFinite() && start.p.allFinite() && std::isfinite(start.r) && std::isfinite(start.theta);
+}
+
+}  // namespace
+
+Fit fit_cone(const Samples& s) {
+  Fit out;
+  out.shape.type = ShapeType::cone;
+  Normalized ns;
+  if (!fit::normalize(s, 6, ns)) return out;
+  std::vector<AxisStart> starts;
+  AxisStart st;
+  if (tangent_plane_cone_start(ns, st)) starts.push_back(st);
+  for (const Vector3d& a : candidate_axes(ns, true)) {
+    if (algebraic_cone_start(ns, a, st)) starts.push_back(st);
+    if (circle_start(ns, a, st)) starts.push_back(st);
+  }
+  AxisStart best;
+  if (starts.empty() || !refine_best<ConeModel>(ns, starts, best)) return out;
+  return cone_fit(s, ns, best);
+}
+
+Fit refit_surface(const Samples& s, const Shape& start) {
+  Fit out;
+  out.shape.type = start.type;
+  switch (start.type) {
+    case ShapeType::plane: return fit_plane(s);
+    case ShapeType::sphere: {
+      Normalized ns;
+      if (!fit::normalize(s, 4, ns)) return out;
+      SphereModel m{&ns, (start.point - ns.center) / ns.scale, start.radius / ns.scale};
+      if (!m.c.allFinite() || !(m.r > 0) || !std::isfinite(fit::levenberg_marquardt(m)) || !(m.r > 0)) return out;
+      out.shape.point = ns.to_world(m.c);
+      out.shape.radius = m.r * ns.scale;
+      fit::finish(out, s);
+      return out;
+    }
+    case ShapeType::cylinder:
+    case ShapeType::cone: {
+      const bool cone = start.type == ShapeType::cone;
+      Normalized ns;
+      AxisStart st;
+      if (!fit::normalize(s, cone ? 6 : 5, ns) || !axis_start_of(start, ns, st)) return out;
+      if (cone ? !refine_from<ConeModel>(ns, st) : !refine_from<CylinderModel>(ns, st)) return out;
+      return cone ? cone_fit(s, ns, st) : cylinder_fit(s, ns, st);
+    }
+    default: return out;
+  }
 }
 
 }  // namespace s2c::features

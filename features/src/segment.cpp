@@ -33,6 +33,9 @@ constexpr double kFreeformCrumbShare = 0.01;
 /// Seed neighbourhood of the fit-driven split: up to kSeedRings rings, stopping at kSeedFaces.
 constexpr int kSeedRings = 8;
 constexpr std::size_t kSeedFaces = 100;
+/// A growing region's fits of types other than its own serve as starts for the next refit once
+/// they were made on this many faces.
+constexpr std::size_t kWarmFaces = 1000;
 
 void log_regions(const char* stage, const std::vector<Region>& regions) {
   if (!spdlog::should_log(spdlog::level::debug)) return;
@@ -258,8 +261,24 @@ bool may_choose(ShapeType type, const Samples& s, const SegmentParams& p, Fit& f
   return type == ShapeType::plane ? acceptable(fit, p) : usable(fit, p);
 }
 
-/// choose_shape, reusing `known` (a fit of the same samples, or null) for its type.
-Fit choose_shape_with(const Samples& s, const SegmentParams& p, const Fit* known) {
+/// Fits of one sample set by type: plane, sphere, cylinder, cone (ok false: none).
+using TypeFits = std::array<Fit, 4>;
+int type_slot(ShapeType t) {
+  switch (t) {
+    case ShapeType::plane: return 0;
+    case ShapeType::sphere: return 1;
+    case ShapeType::cylinder: return 2;
+    case ShapeType::cone: return 3;
+    default: return -1;
+  }
+}
+
+/// choose_shape, reusing `known` (a fit of the same samples, or null) for its type. With `warm`
+/// (fits of nearly the same samples: a growing region before its last growth), each curved type
+/// with an acceptable fit there is refined from it, and fitted from the robust starts only when
+/// that refinement is no longer acceptable. `made`, when given, receives the fits of every type.
+Fit choose_shape_with(const Samples& s, const SegmentParams& p, const Fit* known, const TypeFits* warm = nullptr,
+                      TypeFits* made = nullptr) {
   // Distances alone cannot tell shapes apart on CAD tessellations whose vertices lie on two rims
   // (a sphere, a cone and often a cylinder pass exactly through two circles), nor a plane from a
   // strip of a noisy cylinder: the normals can. Score distance and normal residuals against their
@@ -268,17 +287,29 @@ Fit choose_shape_with(const Samples& s, const SegmentParams& p, const Fit* known
     const double d = f.rms / p.tolerance, n = f.normal_rms_deg / p.normal_tol_deg;
     return d * d + n * n;
   };
-  auto fit = [&](ShapeType type) { return known && known->shape.type == type ? *known : fit_of_type(type, s); };
+  auto fit = [&](ShapeType type) {
+    if (known && known->shape.type == type) return *known;
+    const Fit* before = warm && type != ShapeType::plane ? &(*warm)[type_slot(type)] : nullptr;
+    if (before && before->shape.type == type && acceptable(*before, p)) {
+      Fit f = refit_surface(s, before->shape);
+      if (acceptable(f, p)) return f;
+    }
+    return fit_of_type(type, s);
+  };
   const Fit plane = fit(ShapeType::plane);
   Fit freeform;
   freeform.shape.type = ShapeType::freeform;
   freeform.rms = plane.ok ? plane.rms : 0.0;
   const Fit* chosen = acceptable(plane, p) ? &plane : nullptr;
-  if (chosen && score(plane) < 1e-6) return plane;  // exactly flat: nothing can do better
+  if (chosen && score(plane) < 1e-6) {  // exactly flat: nothing can do better
+    if (made) *made = {plane, Fit{}, Fit{}, Fit{}};
+    return plane;
+  }
   // The three fits are independent and each costs milliseconds (the cone most): run them at once.
   Fit candidates[3];
   tbb::parallel_invoke([&] { candidates[0] = fit(ShapeType::sphere); },
                        [&] { candidates[1] = fit(ShapeType::cylinder); }, [&] { candidates[2] = fit(ShapeType::cone); });
+  if (made) *made = {plane, candidates[0], candidates[1], candidates[2]};
   for (const Fit& c : candidates) {
     if (!usable(c, p)) continue;
     // Against a plane a curved shape must halve the score; among the curved ones (a narrow noisy
@@ -368,9 +399,11 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
       return faces_near;
     };
     std::vector<int> current = neighbourhood(kSeedRings, kSeedFaces);
-    Fit fit = choose_shape(region_samples(m, normals, current), p);
+    TypeFits type_fits;  // every type's fit at the last refit
+    Fit fit = choose_shape_with(region_samples(m, normals, current), p, nullptr, nullptr, &type_fits);
     if (fit.shape.type == ShapeType::freeform && current.size() > 20)
-      fit = choose_shape(region_samples(m, normals, neighbourhood(2, std::numeric_limits<std::size_t>::max())), p);
+      fit = choose_shape_with(region_samples(m, normals, neighbourhood(2, std::numeric_limits<std::size_t>::max())), p,
+                              nullptr, nullptr, &type_fits);
     if (fit.shape.type == ShapeType::freeform) {
       for (int f : current) state[f] |= kTried;
       continue;
@@ -379,6 +412,17 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
     current = {seed};
     stamp[seed] = ++epoch;
     std::size_t fitted_size = 1;
+    // The region's shape moves little as it grows, so each refit refines the last one's fits
+    // instead of starting afresh (the robust starts cost several refinements each): its own
+    // type's always, the other types' once they were fitted to kWarmFaces faces (on fewer, a
+    // fit of a type the region is not, e.g. a cone to a patch of a sphere, is no start to go on from).
+    auto warm_starts = [&] {
+      if (fitted_size >= kWarmFaces) return type_fits;
+      TypeFits own;
+      const int k = type_slot(fit.shape.type);
+      if (k >= 0) own[k] = type_fits[k];
+      return own;
+    };
     RawSamples grown;  // samples of current[0 .. gathered), extended at each fit
     std::size_t gathered = 0;
     auto current_samples = [&] {
@@ -391,7 +435,8 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
         if (remaining(g) && stamp[g] != epoch && fits(fit.shape, g)) stamp[g] = epoch, current.push_back(g);
       });
       if (current.size() > fitted_size * 3 / 2 + 8) {
-        const Fit refit = choose_shape(current_samples(), p);
+        const TypeFits warm = warm_starts();
+        const Fit refit = choose_shape_with(current_samples(), p, nullptr, &warm, &type_fits);
         if (refit.shape.type == ShapeType::freeform) break;
         fit = refit;
         fitted_size = current.size();
@@ -403,7 +448,8 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
       continue;
     }
     Region r;
-    r.fit = choose_shape(current_samples(), p);
+    const TypeFits warm = warm_starts();
+    r.fit = choose_shape_with(current_samples(), p, nullptr, &warm);
     r.faces = std::move(current);
     out.push_back(std::move(r));
   }

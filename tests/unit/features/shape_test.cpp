@@ -583,6 +583,68 @@ TEST(FitSphere, NoisyRmsNearSigma) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Refits from an earlier shape (a growing region refits from its fit before the growth)
+
+/// `shape` moved a little: axis tilted by `deg`, point shifted by `mm`, radius and half angle off.
+Shape nudged(Shape shape, double deg, double mm) {
+  const Vector3d tilt_axis = shape.dir.unitOrthogonal();
+  shape.dir = Eigen::AngleAxisd(deg * M_PI / 180.0, tilt_axis) * shape.dir;
+  shape.point += mm * Vector3d(0.6, -0.48, 0.64);
+  shape.radius *= 1.03;
+  if (shape.type == ShapeType::cone) shape.half_angle_deg += 2.0;
+  return shape;
+}
+
+TEST(FitSurface, RefitFromANearbyStartFindsTheShape) {
+  const Pose pose = tilted();
+  Revolution cyl;
+  for (int k = 0; k <= 30; ++k) cyl.rings.emplace_back(k * 1.0, 6.0);
+  cyl.segments = 24;
+  cyl.sweep_deg = 120;
+  cyl.noise = 0.01;
+  const Samples cs = revolution_samples(cyl, pose);
+  const Fit cf = fit_cylinder(cs);
+  const Fit cr = refit_surface(cs, nudged(cf.shape, 3.0, 0.3));
+  expect_cylinder(cr, pose, 6.0, "cylinder refit from a nudged start");
+  EXPECT_NEAR(cr.rms, cf.rms, 1e-6 * cf.rms);
+
+  Revolution cone;
+  for (int k = 0; k <= 8; ++k) cone.rings.emplace_back(0.25 * k, 8.0 + 0.25 * k);  // 45°, apex (0, 0, −8)
+  cone.noise = 0.01;
+  const Samples ks = revolution_samples(cone, pose);
+  const Fit kf = fit_cone(ks);
+  const Fit kr = refit_surface(ks, nudged(kf.shape, 3.0, 0.3));
+  expect_cone(kr, pose, Vector3d(0, 0, -8), 45.0, "cone refit from a nudged start");
+  EXPECT_NEAR(kr.rms, kf.rms, 1e-6 * kf.rms);
+  // A start with the axis reversed and the apex moved past the samples: still this cone.
+  Shape beyond = kf.shape;
+  beyond.point += 20.0 * beyond.dir;
+  beyond.dir = -beyond.dir;
+  expect_cone(refit_surface(ks, beyond), pose, Vector3d(0, 0, -8), 45.0, "cone refit, apex beyond the samples");
+
+  const Samples ss = revolution_samples(hemisphere(12.0, 72), pose);
+  const Fit sf = fit_sphere(ss);
+  const Fit sr = refit_surface(ss, nudged(sf.shape, 0.0, 0.5));
+  ASSERT_TRUE(sr.ok);
+  EXPECT_LE((sr.shape.point - sf.shape.point).norm(), 1e-6);
+  EXPECT_NEAR(sr.shape.radius, sf.shape.radius, 1e-6);
+
+  // A plane is fitted exactly; curves and freeform are no surface starts.
+  const Fit pr = refit_surface(cs, fit_plane(cs).shape);
+  EXPECT_EQ(pr.shape.type, ShapeType::plane);
+  EXPECT_EQ(pr.rms, fit_plane(cs).rms);
+  Shape line;
+  line.type = ShapeType::line;
+  EXPECT_FALSE(refit_surface(cs, line).ok);
+  EXPECT_FALSE(refit_surface(cs, Shape{}).ok);
+  // Bad samples as for the fits; a start with NaN is no start.
+  EXPECT_FALSE(refit_surface(Samples{}, cf.shape).ok);
+  Shape nan_start = cf.shape;
+  nan_start.radius = kNaN;
+  EXPECT_FALSE(refit_surface(cs, nan_start).ok);
+}
+
+// ---------------------------------------------------------------------------------------------
 // Degenerate input: ok = false, never a crash
 
 TEST(FitSurface, DegenerateInputIsNotOk) {

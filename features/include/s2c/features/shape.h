@@ -77,6 +77,12 @@ Fit fit_plane(const Samples& s);
 Fit fit_sphere(const Samples& s);
 Fit fit_cylinder(const Samples& s);
 Fit fit_cone(const Samples& s);
+/// The fit of start.type refined from `start` (a fit of nearly the same samples, e.g. before a
+/// region grew) instead of from the robust initial estimates: one Levenberg–Marquardt run, a
+/// fraction of the cost. It finds the optimum near `start`, not necessarily the best of the
+/// several starts fit_* tries. Plane: fit_plane (already exact). ok false as for fit_*, and for
+/// curve or freeform starts.
+Fit refit_surface(const Samples& s, const Shape& start);
 /// Curves: the samples are polyline vertices in order (normals unused). Line: the PCA line from
 /// the projection of the first sample towards that of the last. ok false as for the surfaces
 /// (fewer than 2 distinct points for a line; collinear or fewer than 3 for a circle).
