@@ -6,7 +6,7 @@
 #include <limits>
 #include <optional>
 #include <queue>
-#include <set>
+#include <map>
 #include <unordered_map>
 
 #include <spdlog/spdlog.h>
@@ -36,6 +36,8 @@ constexpr std::size_t kSeedFaces = 100;
 /// A growing region's fits of types other than its own serve as starts for the next refit once
 /// they were made on this many faces.
 constexpr std::size_t kWarmFaces = 1000;
+/// A refused merge is tried again once one of the two regions has grown by this share.
+constexpr double kRetryGrowth = 0.02;
 
 void log_regions(const char* stage, const std::vector<Region>& regions) {
   if (!spdlog::should_log(spdlog::level::debug)) return;
@@ -610,15 +612,18 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
 
   // Merge neighbours that are one primitive (a plane cut by a spurious crease, a cylinder split
   // in two): same type, and the union still fits within tolerance.
-  // A pair that failed to merge is not tried again while both regions are unchanged (the key:
-  // first face and size of each; merging changes both).
-  std::set<std::array<std::size_t, 4>> refused;
+  // A pair that failed to merge is not tried again until one of its regions has grown by more
+  // than kRetryGrowth (regions only grow here, and keep their first face, the key): crumbs
+  // absorbed one per pass by a large region do not make a union fit that did not, and each retry
+  // fits a cylinder to the two regions' samples anew.
+  std::map<std::pair<int, int>, std::pair<std::size_t, std::size_t>> refused;  // sizes when refused
+  auto was_refused = [&](const Region& A, const Region& B) {
+    const auto it = refused.find({A.faces.front(), B.faces.front()});
+    auto grown = [](std::size_t now, std::size_t then) { return now > then + kRetryGrowth * then; };
+    return it != refused.end() && !grown(A.faces.size(), it->second.first) && !grown(B.faces.size(), it->second.second);
+  };
   // Raw samples of the regions that were the first of a pair, kept while they are unchanged.
   std::vector<std::optional<RawSamples>> raw(seg.regions.size());
-  auto key_of = [](const Region& A, const Region& B) {
-    return std::array<std::size_t, 4>{static_cast<std::size_t>(A.faces.front()), A.faces.size(),
-                                      static_cast<std::size_t>(B.faces.front()), B.faces.size()};
-  };
   // One pass tries the neighbouring pairs in order; a region merged in the pass is not tried
   // again in it. The trials run in rounds: a round evaluates, in parallel, every pending trial
   // whose two regions no earlier pending trial holds, then applies the results in order. Each
@@ -656,7 +661,7 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
       // Across a real crease two planes never fit one plane; this guards near-tangent cases.
       if (ta == ShapeType::plane && std::abs(A.fit.shape.dir.dot(B.fit.shape.dir)) < std::cos(2.0 * M_PI / 180))
         continue;
-      if (refused.count(key_of(A, B))) continue;
+      if (was_refused(A, B)) continue;
       trials.push_back({a, b, mixed, false, {}, std::nullopt});
     }
     auto evaluate = [&](Trial& t) {
@@ -704,7 +709,7 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
         Region& A = seg.regions[t.a];
         Region& B = seg.regions[t.b];
         if (!t.ok) {
-          refused.insert(key_of(A, B));
+          refused[{A.faces.front(), B.faces.front()}] = {A.faces.size(), B.faces.size()};
           continue;
         }
         A.faces.insert(A.faces.end(), B.faces.begin(), B.faces.end());
