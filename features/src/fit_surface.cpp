@@ -153,6 +153,20 @@ bool tangent_plane_cone_start(const Normalized& s, AxisStart& out) {
   return true;
 }
 
+/// True when every parameter of the start is finite.
+bool all_finite(const AxisStart& st) {
+  return st.a.allFinite() && st.p.allFinite() && std::isfinite(st.r) && std::isfinite(st.theta);
+}
+
+/// One Levenberg–Marquardt run of the model from `start` on the samples `s`.
+template <class Model>
+bool refine_from(const Normalized& s, AxisStart& start) {
+  Model m(s, start.a, start.p, start.r, start.theta);
+  if (!std::isfinite(fit::levenberg_marquardt(m))) return false;
+  start = {m.a, m.p, m.r, m.theta};
+  return all_finite(start);
+}
+
 /// Refines every start on a coarse subsample, then the best one on all refinement samples.
 template <class Model>
 bool refine_best(const Normalized& s, const std::vector<AxisStart>& starts, AxisStart& best) {
@@ -161,17 +175,12 @@ bool refine_best(const Normalized& s, const std::vector<AxisStart>& starts, Axis
   for (const AxisStart& st : starts) {
     Model m(coarse, st.a, st.p, st.r, st.theta);
     const double cost = fit::levenberg_marquardt(m);
-    if (!(cost < best_cost) || !m.a.allFinite() || !m.p.allFinite() || !std::isfinite(m.r) ||
-        !std::isfinite(m.theta))
-      continue;
+    const AxisStart refined{m.a, m.p, m.r, m.theta};
+    if (!(cost < best_cost) || !all_finite(refined)) continue;
     best_cost = cost;
-    best = {m.a, m.p, m.r, m.theta};
+    best = refined;
   }
-  if (!(best_cost < kInf)) return false;
-  Model m(s, best.a, best.p, best.r, best.theta);
-  if (!std::isfinite(fit::levenberg_marquardt(m))) return false;
-  best = {m.a, m.p, m.r, m.theta};
-  return best.a.allFinite() && best.p.allFinite() && std::isfinite(best.r) && std::isfinite(best.theta);
+  return best_cost < kInf && refine_from<Model>(s, best);
 }
 
 }  // namespace
@@ -298,16 +307,7 @@ bool axis_start_of(const Shape& shape, const Normalized& ns, AxisStart& out) {
     const double height = -a.dot(q);  // the centroid above the apex
     out = {a, q + height * a, height * std::tan(theta), theta};
   }
-  return out.a.allFinite() && out.p.allFinite() && std::isfinite(out.r) && out.r > 0 && std::isfinite(out.theta);
-}
-
-/// One Levenberg–Marquardt run of the model from `start` on the refinement samples.
-template <class Model>
-bool refine_from(const Normalized& ns, AxisStart& start) {
-  Model m(ns, start.a, start.p, start.r, start.theta);
-  if (!std::isfinite(fit::levenberg_marquardt(m))) return false;
-  start = {m.a, m.p, m.r, m.theta};
-  return start.a.allFinite() && start.p.allFinite() && std::isfinite(start.r) && std::isfinite(start.theta);
+  return all_finite(out) && out.r > 0;
 }
 
 }  // namespace
