@@ -636,19 +636,23 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
     std::optional<RawSamples> united;
   };
   auto curved = [](ShapeType t) { return t == ShapeType::sphere || t == ShapeType::cylinder || t == ShapeType::cone; };
+  // The neighbouring pairs, from the edges once: regions only unite, so after a pass the pairs
+  // are those of before with each merged region renamed to the one it joined (a scan of the
+  // million edges per pass cost more than the pass's bookkeeping).
+  std::vector<std::pair<int, int>> pairs;
+  for (const auto& E : m.edges) {
+    if (E.f1 < 0) continue;
+    int a = seg.face_region[E.f0], b = seg.face_region[E.f1];
+    if (a == b || a < 0 || b < 0) continue;
+    if (a > b) std::swap(a, b);
+    pairs.emplace_back(a, b);
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
   bool merged = true;
   while (merged) {
     merged = false;
-    std::vector<std::pair<int, int>> pairs;
-    for (const auto& E : m.edges) {
-      if (E.f1 < 0) continue;
-      int a = seg.face_region[E.f0], b = seg.face_region[E.f1];
-      if (a == b || a < 0 || b < 0) continue;
-      if (a > b) std::swap(a, b);
-      pairs.emplace_back(a, b);
-    }
-    std::sort(pairs.begin(), pairs.end());
-    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    std::vector<int> joined(seg.regions.size(), -1);  // region merged into another in this pass
     std::vector<Trial> trials;
     for (auto [a, b] : pairs) {
       const Region& A = seg.regions[a];
@@ -718,6 +722,7 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
         A.area += B.area;
         for (int g : B.faces) seg.face_region[g] = t.a;
         B.faces.clear();
+        joined[t.b] = t.a;
         touched[t.a] = touched[t.b] = 1;
         ++seg.merges;
         merged = true;
@@ -725,10 +730,25 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
       while (next < trials.size() && done[next]) ++next;
     }
     if (merged) {
+      // A region that joined another is not joined in the same pass (both are touched), so
+      // one step of `joined` names where it went; then the numbers of the regions kept.
+      std::vector<int> kept_as(seg.regions.size(), -1);
       std::vector<std::optional<RawSamples>> kept;
       for (std::size_t r = 0; r < seg.regions.size(); ++r)
-        if (!seg.regions[r].faces.empty()) kept.push_back(std::move(raw[r]));
+        if (!seg.regions[r].faces.empty()) {
+          kept_as[r] = static_cast<int>(kept.size());
+          kept.push_back(std::move(raw[r]));
+        }
       raw = std::move(kept);
+      auto renamed = [&](int r) { return kept_as[joined[r] >= 0 ? joined[r] : r]; };
+      std::vector<std::pair<int, int>> next_pairs;
+      for (auto [a, b] : pairs) {
+        const int a2 = renamed(a), b2 = renamed(b);
+        if (a2 != b2) next_pairs.emplace_back(std::min(a2, b2), std::max(a2, b2));
+      }
+      std::sort(next_pairs.begin(), next_pairs.end());
+      next_pairs.erase(std::unique(next_pairs.begin(), next_pairs.end()), next_pairs.end());
+      pairs = std::move(next_pairs);
       drop_regions(seg, [](const Region& r) { return r.faces.empty(); });
     }
   }
