@@ -7,7 +7,6 @@
 #include <optional>
 #include <queue>
 #include <map>
-#include <unordered_map>
 
 #include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
@@ -74,13 +73,16 @@ std::vector<std::vector<int>> flood_fill(const MeshArrays& m, const std::vector<
     if (sharp[e] || E.f1 < 0 || !usable[E.f0] || !usable[E.f1]) continue;
     sets.unite(E.f0, E.f1);
   }
-  std::unordered_map<int, int> index;
+  std::vector<int> index(nf, -1);  // component of each root (roots are face ids)
   std::vector<std::vector<int>> out;
   for (int f = 0; f < nf; ++f) {
     if (!usable[f]) continue;
-    auto [it, fresh] = index.emplace(sets.find(f), static_cast<int>(out.size()));
-    if (fresh) out.emplace_back();
-    out[it->second].push_back(f);
+    int& k = index[sets.find(f)];
+    if (k < 0) {
+      k = static_cast<int>(out.size());
+      out.emplace_back();
+    }
+    out[k].push_back(f);
   }
   return out;
 }
