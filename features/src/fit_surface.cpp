@@ -207,6 +207,21 @@ Fit fit_plane(const Samples& s) {
   return out;
 }
 
+namespace {
+
+/// The sphere fit of `s`, refined from `m` (normalised coordinates).
+Fit sphere_fit(const Samples& s, const Normalized& ns, SphereModel m) {
+  Fit out;
+  out.shape.type = ShapeType::sphere;
+  if (!std::isfinite(fit::levenberg_marquardt(m)) || !(m.r > 0)) return out;
+  out.shape.point = ns.to_world(m.c);
+  out.shape.radius = m.r * ns.scale;
+  fit::finish(out, s);
+  return out;
+}
+
+}  // namespace
+
 Fit fit_sphere(const Samples& s) {
   Fit out;
   out.shape.type = ShapeType::sphere;
@@ -228,12 +243,7 @@ Fit fit_sphere(const Samples& s) {
   const Vector3d c = -0.5 * x.head<3>();
   const double r2 = c.squaredNorm() - x[3];
   if (!x.allFinite() || !(r2 > 0)) return out;
-  SphereModel m{&ns, c, std::sqrt(r2)};
-  if (!std::isfinite(fit::levenberg_marquardt(m)) || !(m.r > 0)) return out;
-  out.shape.point = ns.to_world(m.c);
-  out.shape.radius = m.r * ns.scale;
-  fit::finish(out, s);
-  return out;
+  return sphere_fit(s, ns, SphereModel{&ns, c, std::sqrt(r2)});
 }
 
 namespace {
@@ -337,12 +347,8 @@ Fit refit_surface(const Samples& s, const Shape& start) {
     case ShapeType::sphere: {
       Normalized ns;
       if (!fit::normalize(s, 4, ns)) return out;
-      SphereModel m{&ns, (start.point - ns.center) / ns.scale, start.radius / ns.scale};
-      if (!m.c.allFinite() || !(m.r > 0) || !std::isfinite(fit::levenberg_marquardt(m)) || !(m.r > 0)) return out;
-      out.shape.point = ns.to_world(m.c);
-      out.shape.radius = m.r * ns.scale;
-      fit::finish(out, s);
-      return out;
+      const SphereModel m{&ns, (start.point - ns.center) / ns.scale, start.radius / ns.scale};
+      return m.c.allFinite() && m.r > 0 ? sphere_fit(s, ns, m) : out;
     }
     case ShapeType::cylinder:
     case ShapeType::cone: {

@@ -516,9 +516,9 @@ void index_faces(Segmentation& seg) {
 }
 
 /// Drops the regions for which `drop` is true and renumbers the rest; faces of dropped regions
-/// become unassigned (-1).
+/// become unassigned (-1). Returns each old region's new number (-1: dropped).
 template <class Drop>
-void drop_regions(Segmentation& seg, Drop drop) {
+std::vector<int> drop_regions(Segmentation& seg, Drop drop) {
   std::vector<int> remap(seg.regions.size(), -1);
   std::vector<Region> kept;
   for (std::size_t r = 0; r < seg.regions.size(); ++r)
@@ -529,6 +529,15 @@ void drop_regions(Segmentation& seg, Drop drop) {
   seg.regions = std::move(kept);
   for (int& r : seg.face_region)
     if (r >= 0) r = remap[r];
+  return remap;
+}
+
+/// Region pairs ordered (smaller number first), sorted, each once.
+void sort_pairs(std::vector<std::pair<int, int>>& pairs) {
+  for (auto& [a, b] : pairs)
+    if (a > b) std::swap(a, b);
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
 }
 
 }  // namespace
@@ -644,13 +653,10 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
   std::vector<std::pair<int, int>> pairs;
   for (const auto& E : m.edges) {
     if (E.f1 < 0) continue;
-    int a = seg.face_region[E.f0], b = seg.face_region[E.f1];
-    if (a == b || a < 0 || b < 0) continue;
-    if (a > b) std::swap(a, b);
-    pairs.emplace_back(a, b);
+    const int a = seg.face_region[E.f0], b = seg.face_region[E.f1];
+    if (a != b && a >= 0 && b >= 0) pairs.emplace_back(a, b);
   }
-  std::sort(pairs.begin(), pairs.end());
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  sort_pairs(pairs);
   bool merged = true;
   while (merged) {
     merged = false;
@@ -732,26 +738,21 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
       while (next < trials.size() && done[next]) ++next;
     }
     if (merged) {
-      // A region that joined another is not joined in the same pass (both are touched), so
-      // one step of `joined` names where it went; then the numbers of the regions kept.
-      std::vector<int> kept_as(seg.regions.size(), -1);
-      std::vector<std::optional<RawSamples>> kept;
-      for (std::size_t r = 0; r < seg.regions.size(); ++r)
-        if (!seg.regions[r].faces.empty()) {
-          kept_as[r] = static_cast<int>(kept.size());
-          kept.push_back(std::move(raw[r]));
-        }
+      const std::vector<int> kept_as = drop_regions(seg, [](const Region& r) { return r.faces.empty(); });
+      std::vector<std::optional<RawSamples>> kept(seg.regions.size());
+      for (std::size_t r = 0; r < kept_as.size(); ++r)
+        if (kept_as[r] >= 0) kept[kept_as[r]] = std::move(raw[r]);
       raw = std::move(kept);
+      // A region that joined another is not joined in the same pass (both are touched), so
+      // one step of `joined` names where it went.
       auto renamed = [&](int r) { return kept_as[joined[r] >= 0 ? joined[r] : r]; };
       std::vector<std::pair<int, int>> next_pairs;
       for (auto [a, b] : pairs) {
         const int a2 = renamed(a), b2 = renamed(b);
-        if (a2 != b2) next_pairs.emplace_back(std::min(a2, b2), std::max(a2, b2));
+        if (a2 != b2) next_pairs.emplace_back(a2, b2);
       }
-      std::sort(next_pairs.begin(), next_pairs.end());
-      next_pairs.erase(std::unique(next_pairs.begin(), next_pairs.end()), next_pairs.end());
+      sort_pairs(next_pairs);
       pairs = std::move(next_pairs);
-      drop_regions(seg, [](const Region& r) { return r.faces.empty(); });
     }
   }
   for (auto& r : seg.regions) std::sort(r.faces.begin(), r.faces.end());
