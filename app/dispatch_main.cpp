@@ -9,7 +9,6 @@
 #include <vector>
 
 #include "s2c/core/errors.h"
-#include "s2c/core/huge_pages.h"
 #include "s2c/core/version.h"
 
 namespace fs = std::filesystem;
@@ -79,7 +78,6 @@ int main(int argc, char** argv) {
   args.push_back(name.data());
   for (int i = 2; i < argc; ++i) args.push_back(argv[i]);
   args.push_back(nullptr);
-  s2c::request_huge_pages_for_children();  // the stage inherits it (s2c/core/huge_pages.h)
   ::execv(exe.c_str(), args.data());
   std::fprintf(stderr, "scan2cad: error: cannot run %s: %s\n", exe.c_str(), std::strerror(errno));
   return s2c::kExitDevice;

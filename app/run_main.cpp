@@ -5,13 +5,11 @@
 
 #include "s2c/core/cli.h"
 #include "s2c/core/errors.h"
-#include "s2c/core/huge_pages.h"
 #include "src/pipeline.h"
 
 namespace fs = std::filesystem;
 
 int main(int argc, char** argv) {
-  s2c::request_huge_pages_for_children();  // every stage started below inherits it
   CLI::App app{
       "Run every stage that applies to INPUT and leave the results in DIR:\n"
       "  stream dir or cloud → reconstruct → mesh.ply (+ cloud.ply) → repair → repaired.ply\n"

@@ -20,7 +20,6 @@
 #            edit added), and scan2cad check
 # Environment: OUT=DIR (default: a new /tmp directory), VERTICES=50000,1000000, STEPS=20.
 set -uo pipefail
-source "$(dirname "$0")/huge_pages_env.sh"
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root" || exit 2
 build="${1:-build}"

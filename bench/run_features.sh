@@ -28,7 +28,6 @@
 # SCANS="plate shaft bracket pocket shaft_laser", SIGMAS=0,0.1,0.2,0.3, DIV=100, SEED=1,
 # SAMPLES=100000, RUNS=3, VERTICES=1000000, TIMEOUT=1800.
 set -uo pipefail
-source "$(dirname "$0")/huge_pages_env.sh"
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root" || exit 2
 build="${1:-build}"

@@ -17,7 +17,6 @@
 # THRESHOLD=0.25, O3D_DEPTH=9, RECON_ARGS="" (extra arguments for scan2cad reconstruct),
 # BUNNY_ARGS="" (arguments for build/bin/s2c-bench-bunny, run when it exists).
 set -uo pipefail
-source "$(dirname "$0")/huge_pages_env.sh"
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
 build="${1:-build}"

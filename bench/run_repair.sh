@@ -25,7 +25,6 @@
 # cgal_part, abc_*), MEMORY_INPUTS (default: bracket.stl and abc_00000009, the widest band at
 # --div 256), REAL=../shared/data/real/cad.
 set -uo pipefail
-source "$(dirname "$0")/huge_pages_env.sh"
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root" || exit 2
 build="${1:-build}"

@@ -9,7 +9,6 @@
 # the true plate as reference; then times scan2cad render on its meshes and cloud and on a real
 # mesh (the Stanford bunny zipper scan), and the report stage alone. Environment: OUT=DIR.
 set -euo pipefail
-source "$(dirname "$0")/huge_pages_env.sh"
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
 build="${1:-build}"
