@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/parallel_for.h>
+
 #include "fit_util.h"
 
 namespace s2c::features {
@@ -57,28 +59,40 @@ bool intersection_curve(const Shape& a, const Shape& b, const std::vector<Eigen:
 
 std::vector<TracedLine> trace_lines(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals,
                                     const Segmentation& seg, double min_crease_deg, double tolerance, bool noisy) {
-  const int ne = static_cast<int>(m.edges.size());
+  const int ne = static_cast<int>(m.edges.size()), nv = m.vertices();
   const double cos_min = std::cos(min_crease_deg * M_PI / 180.0);
-  // Line edges and the (sorted) pair of patches each one separates.
+  // Line edges and the (sorted) pair of patches each one separates, decided per edge in parallel
+  // (a million-vertex mesh has millions of edges and a few thousand line edges).
   std::vector<std::pair<int, int>> pair(ne, {-2, -2});
-  std::vector<std::vector<int>> at(m.vertices());
-  for (int e = 0; e < ne; ++e) {
-    const auto& E = m.edges[e];
-    const int a = seg.face_region[E.f0];
-    const int b = E.f1 < 0 ? -1 : seg.face_region[E.f1];
-    if (a == b) continue;
-    if (b >= 0) {
-      const Eigen::Vector3d mid = 0.5 * (m.pos[E.v0] + m.pos[E.v1]);
-      const Eigen::Vector3d na = oriented_normal(seg.regions[a], mid, normals[E.f0]);
-      const Eigen::Vector3d nb = oriented_normal(seg.regions[b], mid, normals[E.f1]);
-      if (na.dot(nb) > cos_min) continue;  // a smooth (tangent) junction of two patches is no line
+  tbb::parallel_for(tbb::blocked_range<int>(0, ne, 8192), [&](const tbb::blocked_range<int>& range) {
+    for (int e = range.begin(); e < range.end(); ++e) {
+      const auto& E = m.edges[e];
+      const int a = seg.face_region[E.f0];
+      const int b = E.f1 < 0 ? -1 : seg.face_region[E.f1];
+      if (a == b) continue;
+      if (b >= 0) {
+        const Eigen::Vector3d mid = 0.5 * (m.pos[E.v0] + m.pos[E.v1]);
+        const Eigen::Vector3d na = oriented_normal(seg.regions[a], mid, normals[E.f0]);
+        const Eigen::Vector3d nb = oriented_normal(seg.regions[b], mid, normals[E.f1]);
+        if (na.dot(nb) > cos_min) continue;  // a smooth (tangent) junction of two patches is no line
+      }
+      pair[e] = {std::min(a, b), std::max(a, b)};
     }
-    pair[e] = {std::min(a, b), std::max(a, b)};
-    at[E.v0].push_back(e);
-    at[E.v1].push_back(e);
+  });
+  // The line edges at each vertex in increasing edge order (CSR: at_start[v] .. at_start[v + 1]).
+  std::vector<int> line_edges;
+  for (int e = 0; e < ne; ++e)
+    if (pair[e].first != -2) line_edges.push_back(e);
+  std::vector<int> at_start(nv + 1, 0), at(2 * line_edges.size());
+  for (int e : line_edges) ++at_start[m.edges[e].v0 + 1], ++at_start[m.edges[e].v1 + 1];
+  for (int v = 0; v < nv; ++v) at_start[v + 1] += at_start[v];
+  {
+    std::vector<int> fill(at_start.begin(), at_start.end() - 1);
+    for (int e : line_edges) at[fill[m.edges[e].v0]++] = e, at[fill[m.edges[e].v1]++] = e;
   }
+  auto degree = [&](int v) { return at_start[v + 1] - at_start[v]; };
   auto junction = [&](int v) {
-    return at[v].size() != 2 || pair[at[v][0]] != pair[at[v][1]];
+    return degree(v) != 2 || pair[at[at_start[v]]] != pair[at[at_start[v] + 1]];
   };
   std::vector<char> used(ne, 0);
   std::vector<TracedLine> lines;
@@ -96,7 +110,8 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const std::vector<Eigen
       }
       line.vertices.push_back(v);
       if (junction(v)) break;
-      e = at[v][0] == e ? at[v][1] : at[v][0];
+      const int* ends = &at[at_start[v]];
+      e = ends[0] == e ? ends[1] : ends[0];
       if (used[e]) break;
     }
     const auto [lo, hi] = pair[e];
@@ -104,12 +119,12 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const std::vector<Eigen
     line.region_b = lo == -1 ? -1 : hi;
     lines.push_back(std::move(line));
   };
-  for (int v = 0; v < m.vertices(); ++v)
-    if (!at[v].empty() && junction(v))
-      for (int e : at[v])
-        if (!used[e]) walk(v, e);
-  for (int e = 0; e < ne; ++e)  // closed loops without junctions (a hole's rim)
-    if (pair[e].first != -2 && !used[e]) walk(m.edges[e].v0, e);
+  for (int v = 0; v < nv; ++v)
+    if (degree(v) > 0 && junction(v))
+      for (int k = at_start[v]; k < at_start[v + 1]; ++k)
+        if (!used[at[k]]) walk(v, at[k]);
+  for (int e : line_edges)  // closed loops without junctions (a hole's rim)
+    if (!used[e]) walk(m.edges[e].v0, e);
 
   // A chain of mesh edges along a worn crease zigzags by up to half an edge on top of the noise.
   const double line_tol =
