@@ -9,6 +9,7 @@
 
 #include "s2c/core/distance.h"
 #include "s2c/core/errors.h"
+#include "vector_math.h"
 
 namespace s2c::features {
 
@@ -37,6 +38,8 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
     std::vector<int> mark;      // face f queued for the current vertex: mark[f] == vertex
     std::vector<int> expanded;  // vertex u's faces queued: expanded[u] == vertex
     std::vector<int> queue;
+    std::vector<int> voters;      // faces within the radius, in queue order
+    std::vector<double> weights;  // their exp(−3d/r), computed together (vector_math.h)
   };
   // Per face its centroid and the radius of the ball about it holding the triangle, side by
   // side: the test that rejects most queued faces then reads one cache line, not two arrays.
@@ -49,7 +52,7 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
     }
   });
   tbb::enumerable_thread_specific<Scratch> scratch(
-      [nf, nv] { return Scratch{std::vector<int>(nf, -1), std::vector<int>(nv, -1), {}}; });
+      [nf, nv] { return Scratch{std::vector<int>(nf, -1), std::vector<int>(nv, -1), {}, {}, {}}; });
   // Vertices in the order the faces first reach them: neighbours are then voted on one after the
   // other and share the faces in cache (vertex numbering often follows refinement levels).
   std::vector<int> order;
@@ -75,6 +78,8 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
         s.queue.push_back(m.vf[k]);
       }
       const std::size_t incident_faces = s.queue.size();  // v's own faces come first
+      s.voters.clear();
+      s.weights.clear();
       for (std::size_t q = 0; q < s.queue.size(); ++q) {
         const int f = s.queue[q];
         const bool incident = q < incident_faces;
@@ -92,9 +97,8 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
           d = std::sqrt(d2);
           if (d > radius) continue;
         }
-        const double mu = std::min(m.farea[f], disc) / disc * (incident ? 1.0 : std::exp(-3.0 * d / radius));
-        const Eigen::Vector3d& n = normals[f];
-        T.noalias() += mu * n * n.transpose();
+        s.voters.push_back(f);
+        s.weights.push_back(-3.0 * d / radius);
         // A vertex's faces are queued once: after that every one of them is marked, so a second
         // pass over its list (up to three per vertex otherwise) would queue nothing.
         for (int u : m.tri[f]) {
@@ -106,6 +110,15 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
               s.queue.push_back(m.vf[k]);
             }
         }
+      }
+      // The decay weights in one call: the vectorised exp does two at a time, and v's own faces
+      // (the first voters: an incident face always votes) weigh 1.
+      exp_in_place(s.weights.data() + incident_faces, s.weights.size() - incident_faces);
+      for (std::size_t k = 0; k < s.voters.size(); ++k) {
+        const int f = s.voters[k];
+        const double mu = std::min(m.farea[f], disc) / disc * (k < incident_faces ? 1.0 : s.weights[k]);
+        const Eigen::Vector3d& n = normals[f];
+        T.noalias() += mu * n * n.transpose();
       }
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
       es.computeDirect(T);
