@@ -47,16 +47,6 @@ void log_regions(const char* stage, const std::vector<Region>& regions) {
   }
 }
 
-/// Faces sharing a vertex with f (f excluded), appended to `out`.
-void face_ring(const MeshArrays& m, int f, std::vector<int>& out) {
-  out.clear();
-  for (int v : m.tri[f])
-    for (int k = m.vf_start[v]; k < m.vf_start[v + 1]; ++k)
-      if (m.vf[k] != f) out.push_back(m.vf[k]);
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-}
-
 bool sharp_edge(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, int e, double cos_min) {
   const auto& E = m.edges[e];
   if (E.f1 < 0) return true;
@@ -105,52 +95,6 @@ double growth_cost(const MeshArrays& m, const std::vector<Eigen::Vector3d>& norm
   const double agree = std::abs(sn.dot(n));
   return d / tolerance + 4.0 * (1.0 - agree);
 }
-
-}  // namespace
-
-std::vector<Eigen::Vector3d> filter_normals(const MeshArrays& m, int iterations, double sigma_r) {
-  std::vector<Eigen::Vector3d> n = m.fnormal, next(m.faces());
-  const double sigma_s = std::max(m.mean_edge, 1e-12);
-  // Plain bilateral filtering keeps outliers: a sliver whose noisy normal is 50° off its
-  // neighbours sees them all as "across a crease" and stays as it is. The first iterations
-  // therefore compare neighbours with a guide, the vector median of the 1-ring (the ring normal
-  // closest to all others, area-weighted), which ignores outliers yet stays on one side of a crease.
-  constexpr int kGuidedIterations = 2;
-  for (int it = 0; it < iterations; ++it) {
-    const bool guided = it < kGuidedIterations;
-    tbb::parallel_for(tbb::blocked_range<int>(0, m.faces(), 512), [&](const tbb::blocked_range<int>& range) {
-      std::vector<int> ring;
-      for (int f = range.begin(); f < range.end(); ++f) {
-        face_ring(m, f, ring);
-        Eigen::Vector3d guide = n[f];
-        if (guided) {
-          ring.push_back(f);
-          double best = std::numeric_limits<double>::infinity();
-          for (int a : ring) {
-            double cost = 0;
-            for (int b : ring) cost += m.farea[b] * (n[a] - n[b]).norm();
-            if (cost < best) best = cost, guide = n[a];
-          }
-          ring.pop_back();
-        }
-        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-        auto add = [&](int g) {
-          const double ds = (m.centroid[f] - m.centroid[g]).norm() / sigma_s;
-          const double dr = (guide - n[g]).norm() / sigma_r;
-          sum += m.farea[g] * std::exp(-0.5 * (ds * ds + dr * dr)) * n[g];
-        };
-        add(f);
-        for (int g : ring) add(g);
-        const double len = sum.norm();
-        next[f] = len > 0 ? Eigen::Vector3d(sum / len) : n[f];
-      }
-    });
-    n.swap(next);
-  }
-  return n;
-}
-
-namespace {
 
 /// Samples of a face set before their normals are normalised, with the vertex of each: the
 /// merges continue the samples of A ∪ B from A's instead of gathering all of them again.
