@@ -20,7 +20,8 @@
 #              OUT/scan_NAME and reused when present; then s2c-bench-features mesh and
 #              s2c-bench-cgal-ransac mesh on it against fixtures/parts/PART.truth.json
 #   speed      s2c-bench-features speed: the CGAL fandisk subdivided to ≥ VERTICES vertices, analyze()
-#              best of 3
+#              best of 3 and the first run; the CGAL anchor subdivided to 0.97 M vertices; the
+#              pocket scan's repaired mesh when the scans section left one in OUT
 # Every bench command runs under `timeout $TIMEOUT` (default 1800 s); a row that timed out is
 # reported as such.
 #
@@ -135,6 +136,16 @@ for section in $sections; do
       echo
       run speed "$bin/s2c-bench-features" speed --vertices "$vertices"
       echo
+      # A second CAD mesh near a million vertices: the CGAL anchor, subdivided four times
+      # (972,538 vertices; its faceted round parts become many flat patches).
+      run speed_anchor "$bin/s2c-bench-features" speed --mesh ../shared/data/real/cad/cgal_anchor_dense.off \
+        --vertices 900000
+      echo
+      # The pipeline's own input: a scan's repaired mesh (the scans section's, when it ran).
+      if [[ -s "$out/scan_pocket/repaired.ply" ]]; then
+        run speed_scan_pocket "$bin/s2c-bench-features" speed --mesh "$out/scan_pocket/repaired.ply" --vertices 0
+        echo
+      fi
       ;;
     *)
       echo "run_features.sh: unknown section $section" >&2
