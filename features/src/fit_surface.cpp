@@ -4,6 +4,8 @@
 #include <limits>
 #include <vector>
 
+#include <tbb/parallel_for.h>
+
 #include "fit_models.h"
 #include "fit_util.h"
 
@@ -171,14 +173,21 @@ bool refine_from(const Normalized& s, AxisStart& start) {
 template <class Model>
 bool refine_best(const Normalized& s, const std::vector<AxisStart>& starts, AxisStart& best) {
   const Normalized coarse = thin(s, kCoarseSamples);
-  double best_cost = kInf;
-  for (const AxisStart& st : starts) {
+  // The starts' runs are independent: side by side (a cone's nine are the longest path of a
+  // small region's shape choice), then the best taken in start order as one loop would.
+  std::vector<double> costs(starts.size());
+  std::vector<AxisStart> refined(starts.size());
+  tbb::parallel_for(std::size_t{0}, starts.size(), [&](std::size_t i) {
+    const AxisStart& st = starts[i];
     Model m(coarse, st.a, st.p, st.r, st.theta);
-    const double cost = fit::levenberg_marquardt(m);
-    const AxisStart refined{m.a, m.p, m.r, m.theta};
-    if (!(cost < best_cost) || !all_finite(refined)) continue;
-    best_cost = cost;
-    best = refined;
+    costs[i] = fit::levenberg_marquardt(m);
+    refined[i] = {m.a, m.p, m.r, m.theta};
+  });
+  double best_cost = kInf;
+  for (std::size_t i = 0; i < starts.size(); ++i) {
+    if (!(costs[i] < best_cost) || !all_finite(refined[i])) continue;
+    best_cost = costs[i];
+    best = refined[i];
   }
   return best_cost < kInf && refine_from<Model>(s, best);
 }
