@@ -36,8 +36,10 @@ constexpr double kCleanNoise = 0.003;
 /// On noisy meshes, patches below this share of the surface area take no part in constraints.
 constexpr double kMinConstraintAreaShare = 0.002;
 
-/// Fit tolerance floor on noisy meshes, in median edge lengths (see analyze()).
+/// Fit tolerance floor on noisy meshes, in median edge lengths, and in measured waviness (see
+/// analyze()).
 constexpr double kWavinessPerEdge = 0.1;
+constexpr double kWavinessFactor = 3.0;
 
 /// Constraint detection compares features pairwise. A mesh that falls apart into more features
 /// than this (a broken or unrepaired scan) gets none, with a warning, rather than a run of hours:
@@ -135,9 +137,13 @@ Analysis analyze(const Mesh& mesh, const FeatureOptions& o, nlohmann::json* repo
   sp.noisy = noisy;
   sp.diagonal = diag;
   // A reconstructed surface (Poisson) is smooth between its vertices, so the edge-local noise
-  // misses its error, which is waviness at the scale of the mesh resolution: a tenth of an edge
-  // bounds it on noisy meshes (fixture scans: plane RMS 0.015-0.02 mm at 0.26 mm edges).
-  const double floor = std::max(2e-4 * diag, noisy ? kWavinessPerEdge * edge : 0.0);
+  // misses its error, which is waviness a few edges wide: a tenth of an edge bounds it on noisy
+  // meshes at the default reconstruction depth (fixture scans: plane RMS 0.015-0.02 mm at 0.26 mm
+  // edges). A finer reconstruction has shorter edges but no smaller bumps, so the waviness itself
+  // counts too, three times over as the noise does (the pocket scan at Poisson depth 9: 0.0069
+  // mm, the floor 0.0147 mm from the diagonal, and 1,523 patches instead of 216).
+  const double waviness = noisy && o.fit_tolerance <= 0 ? measure_waviness(m) : 0.0;
+  const double floor = std::max({2e-4 * diag, noisy ? kWavinessPerEdge * edge : 0.0, kWavinessFactor * waviness});
   out.fit_tolerance = o.fit_tolerance > 0 ? o.fit_tolerance : std::max(3.0 * out.noise, floor);
   sp.tolerance = out.fit_tolerance;
   sp.normal_tol_deg = noisy ? 20.0 : 10.0;
@@ -207,6 +213,7 @@ Analysis analyze(const Mesh& mesh, const FeatureOptions& o, nlohmann::json* repo
     (*report)["median_edge_mm"] = edge;
     (*report)["voting_radius_mm"] = out.radius;
     (*report)["fit_tolerance_mm"] = out.fit_tolerance;
+    if (waviness > 0) (*report)["waviness_mm"] = waviness;
     (*report)["vertices"] = {{"face", classes[0]}, {"crease", classes[1]}, {"corner", classes[2]}};
     (*report)["patches"] = f.patches.size();
     (*report)["patch_types"] = patch_types;

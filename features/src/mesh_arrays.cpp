@@ -3,9 +3,59 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Dense>
 #include <tbb/parallel_for.h>
 
 namespace s2c::features {
+namespace {
+
+constexpr int kWavinessRings = 6;
+constexpr int kWavinessSamples = 5000;
+
+/// The vertices within `rings` rings of v0 (v0 first), through the faces.
+std::vector<int> vertex_rings(const MeshArrays& m, int v0, int rings) {
+  // Vertices seen from v0: seen[u] == v0 (a per-thread table as long as the mesh).
+  thread_local std::vector<int> seen;
+  if (seen.size() < static_cast<std::size_t>(m.vertices())) seen.assign(m.vertices(), -1);
+  std::vector<int> verts = {v0};
+  seen[v0] = v0;
+  std::size_t begin = 0;
+  for (int r = 0; r < rings; ++r) {
+    const std::size_t end = verts.size();
+    for (std::size_t k = begin; k < end; ++k)
+      for (int j = m.vf_start[verts[k]]; j < m.vf_start[verts[k] + 1]; ++j)
+        for (int u : m.tri[m.vf[j]])
+          if (seen[u] != v0) seen[u] = v0, verts.push_back(u);
+    begin = end;
+  }
+  return verts;
+}
+
+/// RMS distance of the points from the quadric height field z = ax² + bxy + cy² + dx + ey + f
+/// fitted to them in their principal frame (z along the smallest principal axis); -1 when too few.
+double quadric_residual(const MeshArrays& m, const std::vector<int>& verts) {
+  if (verts.size() < 12) return -1.0;
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (int u : verts) c += m.pos[u];
+  c /= static_cast<double>(verts.size());
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (int u : verts) C += (m.pos[u] - c) * (m.pos[u] - c).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+  es.computeDirect(C);
+  const Eigen::Matrix3d frame = es.eigenvectors();  // columns by ascending eigenvalue: z first
+  Eigen::MatrixXd A(verts.size(), 6);
+  Eigen::VectorXd z(verts.size());
+  for (std::size_t k = 0; k < verts.size(); ++k) {
+    const Eigen::Vector3d q = frame.transpose() * (m.pos[verts[k]] - c);
+    A.row(static_cast<Eigen::Index>(k)) << q[1] * q[1], q[1] * q[2], q[2] * q[2], q[1], q[2], 1.0;
+    z[static_cast<Eigen::Index>(k)] = q[0];
+  }
+  const Eigen::VectorXd coef = A.colPivHouseholderQr().solve(z);
+  return std::sqrt((A * coef - z).squaredNorm() / static_cast<double>(verts.size()));
+}
+
+}  // namespace
+
 
 MeshArrays build_arrays(const Mesh& mesh) {
   MeshArrays m;
@@ -102,6 +152,19 @@ double measure_noise(const MeshArrays& m) {
   if (offsets.empty()) return 0.0;
   std::nth_element(offsets.begin(), offsets.begin() + offsets.size() / 4, offsets.end());
   return offsets[offsets.size() / 4] / 0.3186 / 2.0;
+}
+
+double measure_waviness(const MeshArrays& m) {
+  const int nv = m.vertices();
+  const int stride = std::max(1, nv / kWavinessSamples);
+  std::vector<double> rms((nv + stride - 1) / stride, -1.0);
+  tbb::parallel_for(0, static_cast<int>(rms.size()), [&](int i) {
+    rms[i] = quadric_residual(m, vertex_rings(m, i * stride, kWavinessRings));
+  });
+  rms.erase(std::remove_if(rms.begin(), rms.end(), [](double r) { return !(r >= 0); }), rms.end());
+  if (rms.empty()) return 0.0;
+  std::nth_element(rms.begin(), rms.begin() + rms.size() / 4, rms.end());
+  return rms[rms.size() / 4];
 }
 
 }  // namespace s2c::features

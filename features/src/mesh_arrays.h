@@ -39,4 +39,12 @@ MeshArrays build_arrays(const Mesh& mesh);
 /// other face's plane; its lower quartile, scaled to a standard deviation, leaves creases out.
 double measure_noise(const MeshArrays& m);
 
+/// Waviness of the surface (mm): the RMS distance of the vertices within kWavinessRings rings of
+/// a vertex from the quadric height field fitted to them in their principal frame, lower quartile
+/// over about kWavinessSamples vertices. Where measure_noise sees the roughness between
+/// neighbouring faces, this sees bumps a few edges wide, which a Poisson surface has at any
+/// resolution: its size does not fall with the edge length. Curvature does not count (the
+/// quadric absorbs it), creases mostly not (the lower quartile).
+double measure_waviness(const MeshArrays& m);
+
 }  // namespace s2c::features

@@ -13,6 +13,7 @@
 #include "s2c/core/disjoint_sets.h"
 #include "s2c/features/analyze.h"
 #include "features_eval.h"
+#include "mesh_arrays.h"
 #include "test_util.h"
 #include "truth_match.h"
 
@@ -214,6 +215,31 @@ TEST(FeaturesInput, SphereWithoutCreasesIsOnePatchAndNoLines) {
   EXPECT_EQ(a.features.patches[0].shape.type, ShapeType::sphere);
   EXPECT_NEAR(a.features.patches[0].shape.radius, 5.0, 0.05);
   EXPECT_TRUE(a.features.lines.empty());
+}
+
+
+// A Poisson surface has bumps a few edges wide at any resolution; the waviness must see them,
+// whatever the edge length, and not the curvature of the part.
+TEST(Waviness, SeesBumpsAFewEdgesWideNotCurvatureNorEdgeLength) {
+  const double radius = 5.0, amplitude = 0.02, wavelength = 1.2;  // mm
+  auto waviness = [&](int levels, bool bumps) {
+    TriangleSoup s = test::icosphere(Eigen::Vector3d::Zero(), radius, levels);
+    const double k = 2 * M_PI / wavelength;
+    if (bumps)
+      for (auto& q : s.vertices)
+        q *= 1.0 + amplitude / radius * std::sin(k * q.x()) * std::sin(k * q.y()) * std::sin(k * q.z());
+    Mesh m;
+    soup_to_mesh(s, m);
+    return measure_waviness(build_arrays(m));
+  };
+  // A plane fitted to the six rings would leave their sagitta, about 0.04 mm at level 5.
+  EXPECT_LT(waviness(5, false), 0.1 * amplitude);
+  const double coarse = waviness(4, true), fine = waviness(5, true);
+  EXPECT_GT(coarse, 0.2 * amplitude);
+  EXPECT_LT(coarse, 1.2 * amplitude);
+  EXPECT_GT(fine, 0.2 * amplitude);
+  EXPECT_LT(fine, 1.2 * amplitude);
+  EXPECT_LT(std::max(coarse, fine) / std::min(coarse, fine), 2.0) << coarse << " " << fine;
 }
 
 }  // namespace
