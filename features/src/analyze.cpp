@@ -141,7 +141,7 @@ Analysis analyze(const Mesh& mesh, const FeatureOptions& o, nlohmann::json* repo
   // meshes at the default reconstruction depth (fixture scans: plane RMS 0.015-0.02 mm at 0.26 mm
   // edges). A finer reconstruction has shorter edges but no smaller bumps, so the waviness itself
   // counts too, three times over as the noise does (the pocket scan at Poisson depth 9: 0.0069
-  // mm, the floor 0.0147 mm from the diagonal, and 1,523 patches instead of 216).
+  // mm, the floor 0.0147 mm from the diagonal: 1,523 patches, 603 with this floor).
   const double waviness = noisy && o.fit_tolerance <= 0 ? measure_waviness(m) : 0.0;
   const double floor = std::max({2e-4 * diag, noisy ? kWavinessPerEdge * edge : 0.0, kWavinessFactor * waviness});
   out.fit_tolerance = o.fit_tolerance > 0 ? o.fit_tolerance : std::max(3.0 * out.noise, floor);
