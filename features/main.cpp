@@ -40,7 +40,8 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--fit-tolerance", o.fit_tolerance,
                  "Accept a plane/cylinder/sphere/cone when the RMS distance is at most this, mm "
-                 "(default: max(3 noise, 2e-4 diagonal), on noisy meshes at least 0.1 median edge)")
+                 "(default: max(3 noise, 2e-4 diagonal), on noisy meshes at least 0.1 median edge and "
+                 "3 x the waviness, the surface's bumps a few edges wide; --report lists both)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--angle-tolerance", o.constraint.angle_tol_deg, "Constraint angle tolerance, degrees")
       ->check(CLI::Range(0.0, 10.0))->capture_default_str();
