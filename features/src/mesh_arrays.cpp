@@ -6,56 +6,57 @@
 #include <Eigen/Dense>
 #include <tbb/parallel_for.h>
 
+#include "fit_util.h"
+
 namespace s2c::features {
 namespace {
 
 constexpr int kWavinessRings = 6;
 constexpr int kWavinessSamples = 5000;
 
-/// The vertices within `rings` rings of v0 (v0 first), through the faces.
-std::vector<int> vertex_rings(const MeshArrays& m, int v0, int rings) {
-  // Vertices seen from v0: seen[u] == v0 (a per-thread table as long as the mesh).
-  thread_local std::vector<int> seen;
-  if (seen.size() < static_cast<std::size_t>(m.vertices())) seen.assign(m.vertices(), -1);
+/// The positions of the vertices within `rings` rings of v0 (v0 first), through the faces.
+std::vector<Eigen::Vector3d> vertex_rings(const MeshArrays& m, int v0, int rings) {
+  // Vertices seen, in a per-thread table as long as the mesh; only the entries set here are
+  // reset, so the next call (on this mesh or another) starts from a clean table.
+  thread_local std::vector<char> seen;
+  if (seen.size() < static_cast<std::size_t>(m.vertices())) seen.assign(m.vertices(), 0);
   std::vector<int> verts = {v0};
-  seen[v0] = v0;
+  seen[v0] = 1;
   std::size_t begin = 0;
   for (int r = 0; r < rings; ++r) {
     const std::size_t end = verts.size();
     for (std::size_t k = begin; k < end; ++k)
       for (int j = m.vf_start[verts[k]]; j < m.vf_start[verts[k] + 1]; ++j)
         for (int u : m.tri[m.vf[j]])
-          if (seen[u] != v0) seen[u] = v0, verts.push_back(u);
+          if (!seen[u]) seen[u] = 1, verts.push_back(u);
     begin = end;
   }
-  return verts;
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(verts.size());
+  for (int u : verts) {
+    seen[u] = 0;
+    points.push_back(m.pos[u]);
+  }
+  return points;
 }
 
 /// RMS distance of the points from the quadric height field z = ax² + bxy + cy² + dx + ey + f
 /// fitted to them in their principal frame (z along the smallest principal axis); -1 when too few.
-double quadric_residual(const MeshArrays& m, const std::vector<int>& verts) {
-  if (verts.size() < 12) return -1.0;
-  Eigen::Vector3d c = Eigen::Vector3d::Zero();
-  for (int u : verts) c += m.pos[u];
-  c /= static_cast<double>(verts.size());
-  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-  for (int u : verts) C += (m.pos[u] - c) * (m.pos[u] - c).transpose();
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
-  es.computeDirect(C);
-  const Eigen::Matrix3d frame = es.eigenvectors();  // columns by ascending eigenvalue: z first
-  Eigen::MatrixXd A(verts.size(), 6);
-  Eigen::VectorXd z(verts.size());
-  for (std::size_t k = 0; k < verts.size(); ++k) {
-    const Eigen::Vector3d q = frame.transpose() * (m.pos[verts[k]] - c);
+double quadric_residual(const std::vector<Eigen::Vector3d>& points) {
+  if (points.size() < 12) return -1.0;
+  const fit::Pca pc = fit::pca(points, {});  // columns by ascending eigenvalue: z first
+  Eigen::MatrixXd A(points.size(), 6);
+  Eigen::VectorXd z(points.size());
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const Eigen::Vector3d q = pc.vectors.transpose() * (points[k] - pc.mean);
     A.row(static_cast<Eigen::Index>(k)) << q[1] * q[1], q[1] * q[2], q[2] * q[2], q[1], q[2], 1.0;
     z[static_cast<Eigen::Index>(k)] = q[0];
   }
   const Eigen::VectorXd coef = A.colPivHouseholderQr().solve(z);
-  return std::sqrt((A * coef - z).squaredNorm() / static_cast<double>(verts.size()));
+  return std::sqrt((A * coef - z).squaredNorm() / static_cast<double>(points.size()));
 }
 
 }  // namespace
-
 
 MeshArrays build_arrays(const Mesh& mesh) {
   MeshArrays m;
@@ -159,7 +160,7 @@ double measure_waviness(const MeshArrays& m) {
   const int stride = std::max(1, nv / kWavinessSamples);
   std::vector<double> rms((nv + stride - 1) / stride, -1.0);
   tbb::parallel_for(0, static_cast<int>(rms.size()), [&](int i) {
-    rms[i] = quadric_residual(m, vertex_rings(m, i * stride, kWavinessRings));
+    rms[i] = quadric_residual(vertex_rings(m, i * stride, kWavinessRings));
   });
   rms.erase(std::remove_if(rms.begin(), rms.end(), [](double r) { return !(r >= 0); }), rms.end());
   if (rms.empty()) return 0.0;

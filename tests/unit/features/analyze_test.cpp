@@ -235,6 +235,8 @@ TEST(Waviness, SeesBumpsAFewEdgesWideNotCurvatureNorEdgeLength) {
   // A plane fitted to the six rings would leave their sagitta, about 0.04 mm at level 5.
   EXPECT_LT(waviness(5, false), 0.1 * amplitude);
   const double coarse = waviness(4, true), fine = waviness(5, true);
+  // Its per-thread scratch is left clean: the same mesh measured again gives the same.
+  EXPECT_EQ(waviness(5, true), fine);
   EXPECT_GT(coarse, 0.2 * amplitude);
   EXPECT_LT(coarse, 1.2 * amplitude);
   EXPECT_GT(fine, 0.2 * amplitude);
