@@ -55,7 +55,8 @@ bool cholesky_in_place(Eigen::Ref<Eigen::MatrixXd> K) {
 
 }  // namespace
 
-bool CubicRbf::fit(const std::vector<Eigen::Vector3d>& centers, const std::vector<double>& values, RbfSolver solver) {
+bool CubicRbf::fit(const std::vector<Eigen::Vector3d>& centers, const std::vector<double>& values, RbfSolver solver,
+                   double linear_tolerance) {
   const int n = static_cast<int>(centers.size());
   if (n < 5 || values.size() != centers.size()) return false;
   // Centre and scale to a unit box: keeps Φ (∝ r³) and the linear block comparable.
@@ -78,6 +79,12 @@ bool CubicRbf::fit(const std::vector<Eigen::Vector3d>& centers, const std::vecto
     cz_[i] = c.z();
   }
   const Eigen::Map<const Eigen::VectorXd> h(values.data(), n);
+  Eigen::MatrixXd P(n, 4);
+  P.col(0).setOnes();
+  P.col(1) = cx_.matrix();
+  P.col(2) = cy_.matrix();
+  P.col(3) = cz_.matrix();
+  if (linear_tolerance > 0 && fit_linear(P, h, linear_tolerance)) return true;
 
   // Φ's lower triangle by columns, each a vectorised pass over coordinate arrays (the n²/2
   // square roots dominate the build); columns in parallel only where it pays.
@@ -96,11 +103,6 @@ bool CubicRbf::fit(const std::vector<Eigen::Vector3d>& centers, const std::vecto
       for (int j = range.begin(); j != range.end(); ++j) column(j);
     });
   }
-  Eigen::MatrixXd P(n, 4);
-  P.col(0).setOnes();
-  P.col(1) = cx_.matrix();
-  P.col(2) = cy_.matrix();
-  P.col(3) = cz_.matrix();
 
   if (solver == RbfSolver::lu) {
     Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n + 4, n + 4);
@@ -169,6 +171,20 @@ bool CubicRbf::fit(const std::vector<Eigen::Vector3d>& centers, const std::vecto
   const Eigen::Vector4d rhs = qh.head(4) - phi.bottomLeftCorner(n - 4, 4).transpose() * y;
   p_ = R.triangularView<Eigen::Upper>().solve(rhs);
   return w_.allFinite() && p_.allFinite();
+}
+
+bool CubicRbf::fit_linear(const Eigen::MatrixXd& P, const Eigen::Ref<const Eigen::VectorXd>& h, double tolerance) {
+  // Least squares over the 4 polynomial columns (O(N)); accepted only when every value is met.
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(P);
+  if (qr.rank() < 4) return false;  // centres in a plane: the linear part is undetermined
+  const Eigen::Vector4d p = qr.solve(h);
+  if (!p.allFinite() || (P * p - h).cwiseAbs().maxCoeff() > tolerance) return false;
+  p_ = p;
+  cx_.resize(0);  // no radial term: evaluate is the polynomial alone
+  cy_.resize(0);
+  cz_.resize(0);
+  w_.resize(0);
+  return true;
 }
 
 namespace {
@@ -246,7 +262,10 @@ bool fit_samples(CubicRbf& rbf, const std::vector<Eigen::Vector3d>& points, cons
       v.push_back(offset);
     }
   }
-  return rbf.fit(c, v) || rbf.fit(c, v, RbfSolver::lu);
+  // Linear within a millionth of the offset (a thousandth of what the projection resolves): a
+  // flat piece, exactly what the full solve would return up to rounding.
+  const double linear = 1e-6 * offset;
+  return rbf.fit(c, v, RbfSolver::nullspace_llt, linear) || rbf.fit(c, v, RbfSolver::lu);
 }
 
 }  // namespace

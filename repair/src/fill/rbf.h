@@ -28,16 +28,24 @@ class CubicRbf {
  public:
   /// Fits f(centers[i]) = values[i]. \return false when the system is singular (e.g.
   /// coincident centres, or all centres in one plane with the linear part undetermined).
+  /// When a linear function meets every value within `linear_tolerance` (the values' unit), it
+  /// is the fit: the interpolant is unique and for linear data it has no radial part, so the
+  /// N×N solve would only return zero weights (a planar piece of a CAD mesh: a flat face).
   bool fit(const std::vector<Eigen::Vector3d>& centers, const std::vector<double>& values,
-           RbfSolver solver = RbfSolver::nullspace_llt);
+           RbfSolver solver = RbfSolver::nullspace_llt, double linear_tolerance = 0);
   double value(const Eigen::Vector3d& x) const;
   /// ∇f (eq. 11).
   Eigen::Vector3d gradient(const Eigen::Vector3d& x) const;
   /// f and ∇f in one pass over the centres (what the projection needs at every step).
   void evaluate(const Eigen::Vector3d& x, double& f, Eigen::Vector3d& g) const;
+  /// Centres with a radial term: 0 when the fit is linear.
   std::size_t size() const { return static_cast<std::size_t>(cx_.size()); }
 
  private:
+  /// The linear fit of `h` over the polynomial block P (normalised coordinates) when it meets
+  /// every value within `tolerance`; then the weights are empty.
+  bool fit_linear(const Eigen::MatrixXd& P, const Eigen::Ref<const Eigen::VectorXd>& h, double tolerance);
+
   Eigen::Vector3d shift_ = Eigen::Vector3d::Zero();
   double scale_ = 1;                              // normalised = (x - shift) * scale
   Eigen::ArrayXd cx_, cy_, cz_;                   // normalised centres, one array per coordinate

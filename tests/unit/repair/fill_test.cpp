@@ -232,6 +232,24 @@ TEST(FillRbf, LinearDataGivesAnExactlyLinearFunction) {
   const Eigen::Vector3d q(4.5, 4.5, 0.3 * 4.5 - 0.2 * 4.5 + 1);
   EXPECT_NEAR(f.value(q), 0, 1e-9);
   EXPECT_NEAR(f.value(q + 0.25 * n), 0.25, 1e-8);
+  // With a tolerance the linear function is found without the N×N solve (no radial centres),
+  // and it is the function the solve gives.
+  fill::CubicRbf lin;
+  ASSERT_TRUE(lin.fit(c, v, fill::RbfSolver::nullspace_llt, 1e-9));
+  EXPECT_EQ(lin.size(), 0u);
+  EXPECT_EQ(f.size(), c.size());
+  for (const Eigen::Vector3d& x : {q, Eigen::Vector3d(q + 0.25 * n), Eigen::Vector3d(-3, 12, 7)}) {
+    EXPECT_NEAR(lin.value(x), f.value(x), 1e-9);
+    EXPECT_LT((lin.gradient(x) - f.gradient(x)).norm(), 1e-9);
+  }
+  EXPECT_LT((lin.gradient(q) - n).norm(), 1e-12);
+  // A bump of a thousandth of the offset is beyond a tolerance of a millionth: the full solve
+  // runs and interpolates the bump.
+  v[0] += 5e-4;
+  fill::CubicRbf bumped;
+  ASSERT_TRUE(bumped.fit(c, v, fill::RbfSolver::nullspace_llt, 5e-7));
+  EXPECT_EQ(bumped.size(), c.size());
+  EXPECT_NEAR(bumped.value(c[0]), v[0], 1e-9);
 }
 
 TEST(FillRbf, LocalPatchesReproduceTheSphere) {
