@@ -5,6 +5,7 @@
 // the paper's sizes (Table 1: 134 and 524 constraint points) and at 1000 and 5000.
 //
 //   s2c-bench-holefill [--holes N] [--real MESH]     (default MESH: the fandisk CAD part)
+//                      [--hole-scale F]              (holes F times the default size)
 //   S2C_BENCH_VERBOSE=1 prints every hole's size, method choice and deviation on stderr.
 //
 // Both sides are timed in the same state: the repetitions of a fill run back to back (ours
@@ -535,6 +536,7 @@ int main(int argc, char** argv) {
   bool rbf_only = false, solve_table = true;
   std::string only;  // one shape: sphere, cylinder, torus or real
   std::string protocol = "both";  // each (one hole per call), together (one call), both
+  double hole_scale = 1;          // holes this many times the default size
   std::string real = std::string(S2C_SHARED_DIR) + "/data/real/cad/cgal_fandisk.off";
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--holes") && i + 1 < argc) holes = std::atoi(argv[++i]);
@@ -546,8 +548,9 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--repeats") && i + 1 < argc) g_repeats = std::max(1, std::atoi(argv[++i]));
     else if (!std::strcmp(argv[i], "--cold")) g_cold = true;
     else if (!std::strcmp(argv[i], "--one-shot")) g_one_shot = true;
+    else if (!std::strcmp(argv[i], "--hole-scale") && i + 1 < argc) hole_scale = std::atof(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: s2c-bench-holefill [--holes N] [--real MESH] [--only sphere|cylinder|torus|real] [--protocol each|together|both] [--repeats N] [--cold] [--one-shot] [--rbf-only | --no-solve-table]\n");
+      std::fprintf(stderr, "usage: s2c-bench-holefill [--holes N] [--real MESH] [--only sphere|cylinder|torus|real] [--protocol each|together|both] [--repeats N] [--cold] [--one-shot] [--hole-scale F] [--rbf-only | --no-solve-table]\n");
       return 2;
     }
   }
@@ -575,7 +578,7 @@ int main(int argc, char** argv) {
   std::vector<Shape> shapes;
   {
     const double R = 20;
-    shapes.push_back({"sphere", icosphere(R, 5), 6, [R](const Eigen::Vector3d& p) { return p.norm() - R; }});
+    shapes.push_back({"sphere", icosphere(R, 5), 6 * hole_scale, [R](const Eigen::Vector3d& p) { return p.norm() - R; }});
   }
   {
     const double R = 10, H = 60;
@@ -585,7 +588,7 @@ int main(int argc, char** argv) {
     };
     shapes.push_back({"cylinder", param_surface(96, 60, false, [R, H](double a, double h) {
                         return Eigen::Vector3d(R * std::cos(2 * M_PI * a), R * std::sin(2 * M_PI * a), H * h);
-                      }), 5, d});
+                      }), 5 * hole_scale, d});
   }
   {
     const double Rt = 20, r = 7;
@@ -593,12 +596,12 @@ int main(int argc, char** argv) {
                         const double ua = 2 * M_PI * a, vb = 2 * M_PI * b;
                         return Eigen::Vector3d((Rt + r * std::cos(vb)) * std::cos(ua),
                                                (Rt + r * std::cos(vb)) * std::sin(ua), r * std::sin(vb));
-                      }), 4,
+                      }), 4 * hole_scale,
                       [Rt, r](const Eigen::Vector3d& p) { return std::hypot(std::hypot(p.x(), p.y()) - Rt, p.z()) - r; }});
   }
   try {
     TriangleSoup s = read_soup(real);
-    const double size = 0.06 * bounds(s).diagonal();
+    const double size = 0.06 * hole_scale * bounds(s).diagonal();
     shapes.push_back({"real", std::move(s), size, {}});
   } catch (const std::exception& e) {
     std::printf("real mesh skipped: %s\n", e.what());
@@ -606,9 +609,10 @@ int main(int argc, char** argv) {
   const char* header =
       "| shape    | fill  | ok    | mean dev   | max dev    | ms/hole  | dev/CGAL | time/CGAL |\n"
       "|----------|-------|-------|------------|------------|----------|--------|--------|\n";
-  std::printf("\nDeviation of the new vertices from the true surface (mm; real: %s, hole size 0.06 × diagonal, "
+  std::printf("\nDeviation of the new vertices from the true surface (mm; real: %s, hole size %g × diagonal, "
               "distance to the removed faces), time per hole (ms)\n\n",
-              real.c_str());
+              real.c_str(), 0.06 * hole_scale);
+  if (hole_scale != 1) std::printf("Holes %g times the default size (sphere %g, cylinder %g, torus %g mm)\n\n", hole_scale, 6 * hole_scale, 5 * hole_scale, 4 * hole_scale);
   if (protocol != "together") {
     std::printf("One hole per call, %d holes per shape:\n\n%s", holes, header);
     for (const Shape& sh : shapes) run_shape(sh.name, sh.soup, sh.hole_size, sh.distance ? &sh.distance : nullptr, holes, rng);

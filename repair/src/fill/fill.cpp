@@ -184,7 +184,11 @@ void build(const TriangleSoup& soup, const MeshIndex& index, const std::vector<i
       build_liepa(soup, index, p, shape, options, candidates, why);
     } else {
       fill::RbfStats stats;
-      if (fill::rbf_fill(soup, index, p, shape, options, stats, why)) candidates.push_back(std::move(p));
+      Patch alternative;
+      if (fill::rbf_fill(soup, index, p, shape, options, stats, why, &alternative)) {
+        candidates.push_back(std::move(p));
+        if (!alternative.faces.empty()) candidates.push_back(std::move(alternative));
+      }
       r.rbf_constraints = stats.constraints;
       r.rbf_solve_seconds = stats.solve_seconds;
       rbf_note = rbf_detail(stats);
@@ -309,7 +313,9 @@ FillResult finish_hole(TriangleSoup& soup, MeshIndex& index, const Hole& hole, c
       if (m == FillMethod::rbf) r.choice += rbf_note;
       if (m != plan.first)
         r.choice += "; " + std::string(to_string(plan.first)) + " failed (" + reasons + ") → " + to_string(m);
-      if (&c != &candidates.front()) r.choice += " (unfaired: the faired patch was invalid)";
+      if (&c != &candidates.front())
+        r.choice += m == FillMethod::rbf ? " (harmonic start: the C1-faired start folded and was invalid)"
+                                         : " (unfaired: the faired patch was invalid)";
       r.reason.clear();
       commit(soup, index, c, r);
       return r;

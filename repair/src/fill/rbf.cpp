@@ -545,8 +545,24 @@ class Rings {
 
 }  // namespace
 
+namespace {
+
+// Whether moving the patch's new vertices from `before` to their positions in `after` turns some
+// face over (its normal reverses).
+bool folds(const Patch& before, const Patch& after) {
+  for (const auto& t : after.faces) {
+    const auto normal = [&](const Patch& p) {
+      return Eigen::Vector3d((p.points[t[1]] - p.points[t[0]]).cross(p.points[t[2]] - p.points[t[0]]));
+    };
+    if (normal(before).dot(normal(after)) < 0) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, const HoleShape& shape,
-              const FillOptions& options, RbfStats& stats, std::string& why) {
+              const FillOptions& options, RbfStats& stats, std::string& why, Patch* alternative) {
   // Two independent halves, run side by side: the implicit surface from the mesh around the hole
   // (steps 1–3 and its fit) and the initial patch (step 4). Both only read the soup.
   Rings ring;                         // vertex → ring
@@ -649,10 +665,12 @@ bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, co
   //    barycentric subdivision, done with Liepa's density rule so it works for non-convex
   //    holes too), faired with a C1 join so that the projection starts near the surface.
   bool patch_built = false;
+  Patch refined;  // before fairing, for the alternative start
   const auto patch_side = [&] {
     patch_built = triangulate(soup, index, patch, patch_why) &&
-                  refine(index, patch, options.max_patch_vertices, patch_why) &&
-                  fair(soup, index, patch, true, patch_why);
+                  refine(index, patch, options.max_patch_vertices, patch_why);
+    if (patch_built && alternative) refined = patch;
+    patch_built = patch_built && fair(soup, index, patch, true, patch_why);
     if (!patch_built) return;
     // Ahead of the fit: the patch's topology and, where the index scans the whole mesh for a
     // query, the faces near where the patch can end up (projection moves a vertex at most
@@ -681,7 +699,19 @@ bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, co
     fit = fit_pieces(split, at, cover, shape, options, combined, stats, fit_why) ? Fit::done : Fit::failed;
   // 6. The gradient projection; one surface over the creases when the pieces' combination does
   //    not fit or does not converge.
-  if (fit == Fit::done && project(combined, shape, options, patch, stats, why)) return true;
+  const Patch start = alternative ? patch : Patch{};
+  if (fit == Fit::done && project(combined, shape, options, patch, stats, why)) {
+    // A face turned over against the faired start or the flat refined patch: the C1 fairing
+    // overshot (a large hole round an edge) and the patch likely intersects itself; validation
+    // decides, with the harmonic start's projection as the next candidate.
+    if (alternative && (folds(start, patch) || folds(refined, patch))) {
+      std::string ignored;
+      Patch other = refined;
+      if (fair(soup, index, other, false, ignored) && project(combined, shape, options, other, stats, ignored))
+        *alternative = std::move(other);
+    }
+    return true;
+  }
   if (fit == Fit::failed) why = fit_why;
   if (split.pieces.size() < 2) return false;
   split = one_piece(soup, index, samples, at);

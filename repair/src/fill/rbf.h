@@ -96,8 +96,12 @@ struct RbfStats {
 
 /// The RBF fill of one hole into `patch` (rim and points set): smoothing of the rim region when
 /// it is noisy, split at sharp creases, initial patch, fit, gradient projection.
+/// When the projection turns a face of the initial patch over (a fold: the C1 fairing can
+/// overshoot where a large hole wraps round an edge), `alternative`, if given, gets the projection
+/// of the refined patch faired harmonically instead (it cannot overshoot its rim), to be tried
+/// when `patch` fails validation; it stays empty otherwise.
 /// \return false with `why` on failure.
 bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, const HoleShape& shape,
-              const FillOptions& options, RbfStats& stats, std::string& why);
+              const FillOptions& options, RbfStats& stats, std::string& why, Patch* alternative = nullptr);
 
 }  // namespace s2c::repair::fill
