@@ -669,14 +669,18 @@ bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, co
   const auto patch_side = [&] {
     patch_built = triangulate(soup, index, patch, patch_why) &&
                   refine(index, patch, options.max_patch_vertices, patch_why);
-    if (patch_built && alternative) refined = patch;
-    patch_built = patch_built && fair(soup, index, patch, true, patch_why);
     if (!patch_built) return;
-    // Ahead of the fit: the patch's topology and, where the index scans the whole mesh for a
-    // query, the faces near where the patch can end up (projection moves a vertex at most
-    // shape.diameter; a quarter of it is plenty in practice, and check_patch scans again when
-    // the patch left the box).
-    patch.topology_ok = check_patch_topology(soup, index, patch).empty();
+    if (alternative) refined = patch;
+    // Ahead of the fit: the patch's topology (final once refined: fairing moves vertices only,
+    // so the check runs beside it, on the core the surface half frees when it finishes first)
+    // and, where the index scans the whole mesh for a query, the faces near where the patch can
+    // end up (projection moves a vertex at most shape.diameter; a quarter of it is plenty in
+    // practice, and check_patch scans again when the patch left the box).
+    bool topology_ok = false;
+    tbb::parallel_invoke([&] { topology_ok = check_patch_topology(soup, index, patch).empty(); },
+                         [&] { patch_built = fair(soup, index, patch, true, patch_why); });
+    patch.topology_ok = topology_ok;
+    if (!patch_built) return;
     if (index.scanning()) {
       Eigen::Vector3d lo = patch.points[0], hi = lo;
       for (const auto& q : patch.points) {
