@@ -543,10 +543,6 @@ class Rings {
   bool sorted_ = true;
 };
 
-}  // namespace
-
-namespace {
-
 // Whether moving the patch's new vertices from `before` to their positions in `after` turns some
 // face over (its normal reverses).
 bool folds(const Patch& before, const Patch& after) {
