@@ -1,6 +1,7 @@
 // Feature-preserving decimation with OpenMesh's Decimater: quadric error (Garland & Heckbert)
 // bounded by a distance, so sharp edges (where planes meet) keep their vertices, and no collapse
 // that turns a face normal by more than 15° (no flips, no folds).
+#include <algorithm>
 #include <array>
 
 #include <OpenMesh/Core/Utils/vector_traits.hh>  // before QuadricT.hh, which uses it undeclared
@@ -45,9 +46,13 @@ class ModPlaneDistanceT : public OpenMesh::Decimater::ModBaseT<MeshT> {
       int k = 0;
       for (auto v : m.fv_range(f)) corner[k++] = v;
       const auto& p = m.point(corner[0]);
-      auto n = (m.point(corner[1]) - p) % (m.point(corner[2]) - p);
+      const auto e1 = m.point(corner[1]) - p, e2 = m.point(corner[2]) - p;
+      auto n = e1 % e2;
       const double length = n.norm();
-      if (!(length > 0)) continue;  // a degenerate face has no plane
+      // A face whose normal is rounding (zero area to 1e-12 of its longest edge squared) has no
+      // plane: at full weight a plane at an arbitrary angle would block collapses around it.
+      const double longest2 = std::max({e1.sqrnorm(), e2.sqrnorm(), (e2 - e1).sqrnorm()});
+      if (!(length > 1e-12 * longest2)) continue;
       n /= length;
       const OpenMesh::Geometry::Quadricd plane(n[0], n[1], n[2], -(p | n));
       for (auto v : corner) m.property(quadric_, v) += plane;

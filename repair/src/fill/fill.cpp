@@ -296,6 +296,7 @@ FillResult finish_hole(TriangleSoup& soup, MeshIndex& index, const Hole& hole, c
     std::string why = plan.why, rbf_note = plan.rbf_note;
     if (m != plan.first) build(soup, index, hole.loop, plan.shape, options, m, own, why, r, rbf_note);
     std::vector<Patch>& candidates = m == plan.first ? plan.candidates : own;
+    std::string main_why;  // why the first candidate failed: the later ones are its fallbacks
     for (std::size_t i = 0; i < candidates.size(); ++i) {
       Patch& c = candidates[i];
       c.base = nv;  // planned before earlier holes of the call added their vertices
@@ -308,7 +309,10 @@ FillResult finish_hole(TriangleSoup& soup, MeshIndex& index, const Hole& hole, c
       } else {
         why = fill::check_patch(soup, index, c);
       }
-      if (!why.empty()) continue;
+      if (!why.empty()) {
+        if (i == 0) main_why = why;
+        continue;
+      }
       r.method = m;
       if (m == FillMethod::rbf) r.choice += rbf_note;
       if (m != plan.first)
@@ -320,7 +324,7 @@ FillResult finish_hole(TriangleSoup& soup, MeshIndex& index, const Hole& hole, c
       commit(soup, index, c, r);
       return r;
     }
-    reasons += (reasons.empty() ? "" : "; ") + std::string(to_string(m)) + ": " + why;
+    reasons += (reasons.empty() ? "" : "; ") + std::string(to_string(m)) + ": " + (main_why.empty() ? why : main_why);
   }
   r.method = plan.first;
   r.reason = reasons;
