@@ -612,7 +612,11 @@ int main(int argc, char** argv) {
   std::printf("\nDeviation of the new vertices from the true surface (mm; real: %s, hole size %g × diagonal, "
               "distance to the removed faces), time per hole (ms)\n\n",
               real.c_str(), 0.06 * hole_scale);
-  if (hole_scale != 1) std::printf("Holes %g times the default size (sphere %g, cylinder %g, torus %g mm)\n\n", hole_scale, 6 * hole_scale, 5 * hole_scale, 4 * hole_scale);
+  if (hole_scale != 1) {
+    std::printf("Holes %g times the default size:", hole_scale);
+    for (const Shape& sh : shapes) std::printf(" %s %g mm", sh.name, sh.hole_size);
+    std::printf("\n\n");
+  }
   if (protocol != "together") {
     std::printf("One hole per call, %d holes per shape:\n\n%s", holes, header);
     for (const Shape& sh : shapes) run_shape(sh.name, sh.soup, sh.hole_size, sh.distance ? &sh.distance : nullptr, holes, rng);

@@ -262,8 +262,8 @@ bool fit_samples(CubicRbf& rbf, const std::vector<Eigen::Vector3d>& points, cons
       v.push_back(offset);
     }
   }
-  // Linear within a millionth of the offset (a thousandth of what the projection resolves): a
-  // flat piece, exactly what the full solve would return up to rounding.
+  // Linear within a millionth of the offset (under a thousandth of what the projection
+  // resolves): a flat piece, exactly what the full solve would return up to rounding.
   const double linear = 1e-6 * offset;
   return rbf.fit(c, v, RbfSolver::nullspace_llt, linear) || rbf.fit(c, v, RbfSolver::lu);
 }
@@ -543,14 +543,14 @@ class Rings {
   bool sorted_ = true;
 };
 
-// Whether moving the patch's new vertices from `before` to their positions in `after` turns some
-// face over (its normal reverses).
-bool folds(const Patch& before, const Patch& after) {
+// Whether moving the patch's points from `before` to where they are in `after` turns some face
+// over (its normal reverses).
+bool folds(const std::vector<Eigen::Vector3d>& before, const Patch& after) {
   for (const auto& t : after.faces) {
-    const auto normal = [&](const Patch& p) {
-      return Eigen::Vector3d((p.points[t[1]] - p.points[t[0]]).cross(p.points[t[2]] - p.points[t[0]]));
+    const auto normal = [&](const std::vector<Eigen::Vector3d>& p) {
+      return Eigen::Vector3d((p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]));
     };
-    if (normal(before).dot(normal(after)) < 0) return true;
+    if (normal(before).dot(normal(after.points)) < 0) return true;
   }
   return false;
 }
@@ -699,12 +699,12 @@ bool rbf_fill(const TriangleSoup& soup, const MeshIndex& index, Patch& patch, co
     fit = fit_pieces(split, at, cover, shape, options, combined, stats, fit_why) ? Fit::done : Fit::failed;
   // 6. The gradient projection; one surface over the creases when the pieces' combination does
   //    not fit or does not converge.
-  const Patch start = alternative ? patch : Patch{};
+  const std::vector<Eigen::Vector3d> faired = alternative ? patch.points : std::vector<Eigen::Vector3d>{};
   if (fit == Fit::done && project(combined, shape, options, patch, stats, why)) {
     // A face turned over against the faired start or the flat refined patch: the C1 fairing
     // overshot (a large hole round an edge) and the patch likely intersects itself; validation
     // decides, with the harmonic start's projection as the next candidate.
-    if (alternative && (folds(start, patch) || folds(refined, patch))) {
+    if (alternative && (folds(faired, patch) || folds(refined.points, patch))) {
       std::string ignored;
       Patch other = refined;
       if (fair(soup, index, other, false, ignored) && project(combined, shape, options, other, stats, ignored))
