@@ -16,41 +16,11 @@
 namespace s2c::repair {
 namespace {
 
-/// May v0 collapse into v1 along h (v0 → v1) without breaking the mesh's topology? OpenMesh's
-/// link condition (TriConnectivity::is_collapse_ok): the edge and both vertices alive, neither
-/// triangle beside the edge with both its other edges on the boundary, two different opposite
-/// vertices vl and vr, no common neighbour of v0 and v1 but vl and vr, and no interior edge
-/// between two boundary vertices. Here rather than in libOpenMeshCore: Debian builds that library
-/// with assertions on, and each status flag it reads there checks the property's type by
-/// building and comparing its name (a malloc and a memcmp): 28 % of a volumetric repair's time
-/// went to that check inside is_collapse_ok (plate, dual contouring at 320 cells).
-bool link_condition_ok(const Mesh& m, Mesh::HalfedgeHandle h) {
-  if (m.status(m.edge_handle(h)).deleted()) return false;
-  const Mesh::HalfedgeHandle o = m.opposite_halfedge_handle(h);
-  const Mesh::VertexHandle v0 = m.to_vertex_handle(o), v1 = m.to_vertex_handle(h);
-  if (m.status(v0).deleted() || m.status(v1).deleted()) return false;
-  // The far vertex of the triangle on halfedge a's side (none on a boundary side); false when that
-  // triangle's two other edges are both boundary edges (the collapse would leave it dangling).
-  auto side = [&](Mesh::HalfedgeHandle a, Mesh::VertexHandle& apex) {
-    if (m.is_boundary(a)) return true;
-    const Mesh::HalfedgeHandle n1 = m.next_halfedge_handle(a), n2 = m.next_halfedge_handle(n1);
-    apex = m.to_vertex_handle(n1);
-    return !(m.is_boundary(m.opposite_halfedge_handle(n1)) && m.is_boundary(m.opposite_halfedge_handle(n2)));
-  };
-  Mesh::VertexHandle vl, vr;
-  if (!side(h, vl) || !side(o, vr) || vl == vr) return false;
-  thread_local std::vector<Mesh::VertexHandle> ring1;
-  ring1.clear();
-  for (Mesh::ConstVertexVertexIter it = m.cvv_iter(v1); it.is_valid(); ++it) ring1.push_back(*it);
-  for (Mesh::ConstVertexVertexIter it = m.cvv_iter(v0); it.is_valid(); ++it)
-    if (*it != vl && *it != vr && std::find(ring1.begin(), ring1.end(), *it) != ring1.end()) return false;
-  return !(m.is_boundary(v0) && m.is_boundary(v1) && !m.is_boundary(h) && !m.is_boundary(o));
-}
-
 /// The mesh the Decimater runs on: the Decimater's templates call is_collapse_ok on the mesh
-/// type they are given, so this one's hides the library's (same test, see above).
+/// type they are given, so this one's hides the library's (the same test, compiled here:
+/// collapse_keeps_topology).
 struct DecimationMesh : Mesh {
-  bool is_collapse_ok(HalfedgeHandle h) const { return link_condition_ok(*this, h); }
+  bool is_collapse_ok(HalfedgeHandle h) const { return collapse_keeps_topology(*this, h); }
 };
 
 /// Garland–Heckbert quadrics with one unit-weight plane per face, bounded by the squared
@@ -117,6 +87,35 @@ class ModPlaneDistanceT : public OpenMesh::Decimater::ModBaseT<MeshT> {
 };
 
 }  // namespace
+
+// The conditions, for v0 → v1 along h: the edge and both vertices alive; neither triangle beside
+// the edge with both its other edges on the boundary; two different opposite vertices vl and vr;
+// no common neighbour of v0 and v1 but vl and vr; no interior edge between two boundary
+// vertices. In libOpenMeshCore each status flag read checks the property's type by building and
+// comparing its name (a malloc and a memcmp): 21 % of a volumetric repair's time went to that
+// inside is_collapse_ok (plate, dual contouring at 320 cells).
+bool collapse_keeps_topology(const Mesh& m, Mesh::HalfedgeHandle h) {
+  if (m.status(m.edge_handle(h)).deleted()) return false;
+  const Mesh::HalfedgeHandle o = m.opposite_halfedge_handle(h);
+  const Mesh::VertexHandle v0 = m.to_vertex_handle(o), v1 = m.to_vertex_handle(h);
+  if (m.status(v0).deleted() || m.status(v1).deleted()) return false;
+  // The far vertex of the triangle on halfedge a's side (none on a boundary side); false when that
+  // triangle's two other edges are both boundary edges (the collapse would leave it dangling).
+  auto side = [&](Mesh::HalfedgeHandle a, Mesh::VertexHandle& apex) {
+    if (m.is_boundary(a)) return true;
+    const Mesh::HalfedgeHandle n1 = m.next_halfedge_handle(a), n2 = m.next_halfedge_handle(n1);
+    apex = m.to_vertex_handle(n1);
+    return !(m.is_boundary(m.opposite_halfedge_handle(n1)) && m.is_boundary(m.opposite_halfedge_handle(n2)));
+  };
+  Mesh::VertexHandle vl, vr;
+  if (!side(h, vl) || !side(o, vr) || vl == vr) return false;
+  thread_local std::vector<Mesh::VertexHandle> ring1;
+  ring1.clear();
+  for (Mesh::ConstVertexVertexIter it = m.cvv_iter(v1); it.is_valid(); ++it) ring1.push_back(*it);
+  for (Mesh::ConstVertexVertexIter it = m.cvv_iter(v0); it.is_valid(); ++it)
+    if (*it != vl && *it != vr && std::find(ring1.begin(), ring1.end(), *it) != ring1.end()) return false;
+  return !(m.is_boundary(v0) && m.is_boundary(v1) && !m.is_boundary(h) && !m.is_boundary(o));
+}
 
 std::size_t decimate(TriangleSoup& soup, double tolerance, const std::vector<char>* locked) {
   if (!(tolerance > 0) || soup.faces.empty()) return 0;

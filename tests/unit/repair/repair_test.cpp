@@ -3,6 +3,7 @@
 
 #include <array>
 #include <map>
+#include <random>
 
 #include "s2c/core/check.h"
 #include "s2c/repair/defects.h"
@@ -169,6 +170,55 @@ TEST(Decimate, TheToleranceIsADistanceOnAFineMesh) {
     worst = std::max(worst, 2 - c.norm());
   }
   EXPECT_LT(worst, tolerance);  // 0.0026 mm; 0.0188 mm with area-weighted quadrics
+}
+
+/// Compares the repair's link condition with OpenMesh's own on every live halfedge of `m`;
+/// returns how many collapses it refused.
+int expect_link_condition_matches_openmesh(Mesh& m, const char* what) {
+  int refused = 0;
+  for (auto h : m.halfedges()) {
+    const bool ours = collapse_keeps_topology(m, h);
+    EXPECT_EQ(ours, m.is_collapse_ok(h)) << what << ", halfedge " << h.idx();
+    refused += !ours;
+  }
+  return refused;
+}
+
+TEST(Decimate, LinkConditionIsOpenMeshs) {
+  // The decimation tests collapses with its own copy of OpenMesh's link condition (the library's
+  // is slow with Debian's assertions): same answer on closed, open and half-collapsed meshes.
+  Mesh sphere;
+  soup_to_mesh(test::icosphere({0, 0, 0}, 1, 2), sphere);
+  expect_link_condition_matches_openmesh(sphere, "icosphere");
+  // An open grid: boundary vertices and edges, corner triangles with two boundary edges.
+  TriangleSoup grid;
+  const int n = 6;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) grid.vertices.emplace_back(i, j, 0);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+      grid.faces.push_back({a, b, d});
+      grid.faces.push_back({a, d, c});
+    }
+  Mesh open;
+  soup_to_mesh(grid, open);
+  // Corner triangles (two boundary edges) and interior edges between boundary vertices: refused.
+  EXPECT_GT(expect_link_condition_matches_openmesh(open, "grid"), 0);
+  // A cube: so few vertices that most collapses would join two faces back to back.
+  Mesh box;
+  soup_to_mesh(test::cube(1.0), box);
+  expect_link_condition_matches_openmesh(box, "cube");
+  // After collapses (deleted edges and vertices, new valences), the comparison again.
+  std::mt19937 rng(7);
+  for (int step = 0; step < 40; ++step) {
+    const auto h = open.halfedge_handle(static_cast<int>(rng() % open.n_halfedges()));
+    if (open.status(open.edge_handle(h)).deleted() || !open.is_collapse_ok(h)) continue;
+    open.collapse(h);
+  }
+  EXPECT_GT(expect_link_condition_matches_openmesh(open, "collapsed grid"), 0);
+  open.garbage_collection();
+  expect_link_condition_matches_openmesh(open, "collapsed grid, compacted");
 }
 
 TEST(Clean, CavityPointsInwardAndDuplicatesGo) {

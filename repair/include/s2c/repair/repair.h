@@ -48,6 +48,12 @@ RepairResult repair_mesh(const TriangleSoup& input, const RepairOptions& options
 /// Returns the number of faces removed.
 std::size_t decimate(TriangleSoup& soup, double tolerance, const std::vector<char>* locked = nullptr);
 
+/// May the source of halfedge h collapse into its target without breaking the mesh's topology?
+/// OpenMesh's link condition (the test of TriConnectivity::is_collapse_ok), compiled here: Debian
+/// builds libOpenMeshCore with assertions on, which made that library call the decimation's
+/// bottleneck (decimate.cpp).
+bool collapse_keeps_topology(const Mesh& mesh, Mesh::HalfedgeHandle h);
+
 const char* to_string(Strategy s);
 
 }  // namespace s2c::repair
