@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 #include <Eigen/Geometry>
+#include <Eigen/SVD>
 #include <pcl/common/transforms.h>
 #include <pcl/features/fpfh_omp.h>
 #include <pcl/features/normal_3d.h>
@@ -13,6 +14,7 @@
 #include <pcl/registration/gicp.h>
 #include <pcl/registration/sample_consensus_prerejective.h>
 #include <spdlog/spdlog.h>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "s2c/core/errors.h"
@@ -111,19 +113,80 @@ Fit evaluate(const CloudPN& source, const Eigen::Isometry3d& pose, const CloudPN
   return f;
 }
 
+using Gicp = pcl::GeneralizedIterativeClosestPoint<PN, PN>;
+/// Neighbours per GICP covariance (PCL's "correspondence randomness").
+constexpr int kCovarianceNeighbours = 10;
+/// PCL's GICP epsilon: the covariance's smallest singular value (the surface's normal direction).
+constexpr double kGicpEpsilon = 0.001;
+
+/// GICP's point covariances of `cloud`, as pcl::GeneralizedIterativeClosestPoint computes them
+/// (same neighbours, same sums in the same order, the same SVD: the same matrices bit for bit),
+/// but on both cores: PCL's loop was 60 % of the registration step.
+Gicp::MatricesVectorPtr gicp_covariances(const CloudPN& cloud) {
+  auto out = std::make_shared<Gicp::MatricesVector>(cloud.size());
+  if (cloud.size() < static_cast<std::size_t>(kCovarianceNeighbours)) return out;
+  const PointIndex<PN> index(cloud);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cloud.size(), 512), [&](const auto& range) {
+    pcl::Indices nn;
+    std::vector<float> sq;
+    for (std::size_t i = range.begin(); i < range.end(); ++i) {
+      Eigen::Matrix3d& cov = (*out)[i];
+      cov.setZero();
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      index.knn(cloud[i].data, kCovarianceNeighbours, nn, sq);
+      for (int j = 0; j < kCovarianceNeighbours; ++j) {
+        const PN& q = cloud[static_cast<std::size_t>(nn[j])];
+        mean[0] += q.x;
+        mean[1] += q.y;
+        mean[2] += q.z;
+        // Float products, summed in double: as PCL does.
+        cov(0, 0) += q.x * q.x;
+        cov(1, 0) += q.y * q.x;
+        cov(1, 1) += q.y * q.y;
+        cov(2, 0) += q.z * q.x;
+        cov(2, 1) += q.z * q.y;
+        cov(2, 2) += q.z * q.z;
+      }
+      mean /= static_cast<double>(kCovarianceNeighbours);
+      for (int k = 0; k < 3; ++k)
+        for (int l = 0; l <= k; ++l) {
+          cov(k, l) /= static_cast<double>(kCovarianceNeighbours);
+          cov(k, l) -= mean[k] * mean[l];
+          cov(l, k) = cov(k, l);
+        }
+      // The two larger singular values become 1 and the smallest epsilon: a plane's covariance.
+      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(cov, Eigen::ComputeFullU);
+      const Eigen::Matrix3d U = svd.matrixU();
+      cov.setZero();
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector3d col = U.col(k);
+        cov += (k == 2 ? kGicpEpsilon : 1.0) * col * col.transpose();
+      }
+    }
+  });
+  return out;
+}
+
 // Generalized ICP (plane-to-plane), coarse to fine: correspondence radii shrink to the last of
 // `radii` × spacing. On partial overlaps of machined parts it converged markedly closer than
 // PCL's symmetric point-to-plane ICP (tests/unit/reconstruct: worst misfit 1.05 vs 1.51 mm
-// from 0.5° / 0.3 mm pose errors).
+// from 0.5° / 0.3 mm pose errors). `source_covariances`, when given, are the source's (a view
+// is refined in several passes; its covariances, in its own frame, do not change).
 Eigen::Isometry3d icp_refine(const CloudPN::Ptr& source, const CloudPN::Ptr& target, const Eigen::Isometry3d& init,
-                             double spacing, const std::vector<double>& radii) {
+                             double spacing, const std::vector<double>& radii,
+                             Gicp::MatricesVectorPtr source_covariances = nullptr) {
   Eigen::Matrix4f guess = init.matrix().cast<float>();
-  pcl::GeneralizedIterativeClosestPoint<PN, PN> gicp;
+  Gicp gicp;
   gicp.setSearchMethodTarget(std::make_shared<NanoSearch<PN>>());
   gicp.setSearchMethodSource(std::make_shared<NanoSearch<PN>>());
   gicp.setInputSource(source);
   gicp.setInputTarget(target);
-  gicp.setCorrespondenceRandomness(10);  // neighbours per covariance
+  gicp.setCorrespondenceRandomness(kCovarianceNeighbours);
+  if (source->size() >= static_cast<std::size_t>(kCovarianceNeighbours) &&
+      target->size() >= static_cast<std::size_t>(kCovarianceNeighbours)) {
+    gicp.setSourceCovariances(source_covariances ? source_covariances : gicp_covariances(*source));
+    gicp.setTargetCovariances(gicp_covariances(*target));
+  }
   for (double f : radii) {
     gicp.setMaxCorrespondenceDistance(f * spacing);
     gicp.setMaximumIterations(30);
@@ -272,6 +335,7 @@ std::vector<Eigen::Isometry3d> register_views(const std::vector<View>& views, do
   // but moved the poses enough to change the features found on the fixture scans downstream
   // (stop 29, bench/README.md).
   const int rounds = o.rounds;
+  std::vector<Gicp::MatricesVectorPtr> covariances(n);
   Progress progress("refine", static_cast<std::size_t>(rounds) * n);
   for (int round = 0; round < rounds; ++round)
     for (int i = 0; i < n; ++i) {
@@ -279,7 +343,9 @@ std::vector<Eigen::Isometry3d> register_views(const std::vector<View>& views, do
       if (!placed[i] || (mode == RegistrationMode::global && i == 0)) continue;
       const auto nb = neighbours_of(i, poses, placed, o.neighbours);
       if (nb.empty()) continue;
-      const Eigen::Isometry3d T = icp_refine(fine[i], union_of(fine, poses, nb), poses[i], spacing, radii);
+      if (!covariances[i] && fine[i]->size() >= static_cast<std::size_t>(kCovarianceNeighbours))
+        covariances[i] = gicp_covariances(*fine[i]);
+      const Eigen::Isometry3d T = icp_refine(fine[i], union_of(fine, poses, nb), poses[i], spacing, radii, covariances[i]);
       if (views[i].pose) {
         const Eigen::Isometry3d delta = views[i].pose->inverse() * T;
         if (angle_deg(delta.rotation()) > o.max_correction_deg) {
