@@ -20,6 +20,7 @@
 #include "s2c/core/errors.h"
 #include "s2c/core/progress.h"
 #include "cloud_util.h"
+#include "gicp_covariances.h"
 #include "kd_search.h"
 
 namespace s2c {
@@ -113,60 +114,6 @@ Fit evaluate(const CloudPN& source, const Eigen::Isometry3d& pose, const CloudPN
   return f;
 }
 
-using Gicp = pcl::GeneralizedIterativeClosestPoint<PN, PN>;
-/// Neighbours per GICP covariance (PCL's "correspondence randomness").
-constexpr int kCovarianceNeighbours = 10;
-/// PCL's GICP epsilon: the covariance's smallest singular value (the surface's normal direction).
-constexpr double kGicpEpsilon = 0.001;
-
-/// GICP's point covariances of `cloud`, as pcl::GeneralizedIterativeClosestPoint computes them
-/// (same neighbours, same sums in the same order, the same SVD: the same matrices bit for bit),
-/// but on both cores: PCL's loop was 60 % of the registration step.
-Gicp::MatricesVectorPtr gicp_covariances(const CloudPN& cloud) {
-  auto out = std::make_shared<Gicp::MatricesVector>(cloud.size());
-  if (cloud.size() < static_cast<std::size_t>(kCovarianceNeighbours)) return out;
-  const PointIndex<PN> index(cloud);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cloud.size(), 512), [&](const auto& range) {
-    pcl::Indices nn;
-    std::vector<float> sq;
-    for (std::size_t i = range.begin(); i < range.end(); ++i) {
-      Eigen::Matrix3d& cov = (*out)[i];
-      cov.setZero();
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      index.knn(cloud[i].data, kCovarianceNeighbours, nn, sq);
-      for (int j = 0; j < kCovarianceNeighbours; ++j) {
-        const PN& q = cloud[static_cast<std::size_t>(nn[j])];
-        mean[0] += q.x;
-        mean[1] += q.y;
-        mean[2] += q.z;
-        // Float products, summed in double: as PCL does.
-        cov(0, 0) += q.x * q.x;
-        cov(1, 0) += q.y * q.x;
-        cov(1, 1) += q.y * q.y;
-        cov(2, 0) += q.z * q.x;
-        cov(2, 1) += q.z * q.y;
-        cov(2, 2) += q.z * q.z;
-      }
-      mean /= static_cast<double>(kCovarianceNeighbours);
-      for (int k = 0; k < 3; ++k)
-        for (int l = 0; l <= k; ++l) {
-          cov(k, l) /= static_cast<double>(kCovarianceNeighbours);
-          cov(k, l) -= mean[k] * mean[l];
-          cov(l, k) = cov(k, l);
-        }
-      // The two larger singular values become 1 and the smallest epsilon: a plane's covariance.
-      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(cov, Eigen::ComputeFullU);
-      const Eigen::Matrix3d U = svd.matrixU();
-      cov.setZero();
-      for (int k = 0; k < 3; ++k) {
-        const Eigen::Vector3d col = U.col(k);
-        cov += (k == 2 ? kGicpEpsilon : 1.0) * col * col.transpose();
-      }
-    }
-  });
-  return out;
-}
-
 // Generalized ICP (plane-to-plane), coarse to fine: correspondence radii shrink to the last of
 // `radii` × spacing. On partial overlaps of machined parts it converged markedly closer than
 // PCL's symmetric point-to-plane ICP (tests/unit/reconstruct: worst misfit 1.05 vs 1.51 mm
@@ -182,10 +129,10 @@ Eigen::Isometry3d icp_refine(const CloudPN::Ptr& source, const CloudPN::Ptr& tar
   gicp.setInputSource(source);
   gicp.setInputTarget(target);
   gicp.setCorrespondenceRandomness(kCovarianceNeighbours);
-  if (source->size() >= static_cast<std::size_t>(kCovarianceNeighbours) &&
-      target->size() >= static_cast<std::size_t>(kCovarianceNeighbours)) {
-    gicp.setSourceCovariances(source_covariances ? source_covariances : gicp_covariances(*source));
-    gicp.setTargetCovariances(gicp_covariances(*target));
+  if (!source_covariances) source_covariances = gicp_covariances(*source);
+  if (auto target_covariances = gicp_covariances(*target); source_covariances && target_covariances) {
+    gicp.setSourceCovariances(source_covariances);
+    gicp.setTargetCovariances(target_covariances);
   }
   for (double f : radii) {
     gicp.setMaxCorrespondenceDistance(f * spacing);
@@ -343,8 +290,7 @@ std::vector<Eigen::Isometry3d> register_views(const std::vector<View>& views, do
       if (!placed[i] || (mode == RegistrationMode::global && i == 0)) continue;
       const auto nb = neighbours_of(i, poses, placed, o.neighbours);
       if (nb.empty()) continue;
-      if (!covariances[i] && fine[i]->size() >= static_cast<std::size_t>(kCovarianceNeighbours))
-        covariances[i] = gicp_covariances(*fine[i]);
+      if (!covariances[i]) covariances[i] = gicp_covariances(*fine[i]);
       const Eigen::Isometry3d T = icp_refine(fine[i], union_of(fine, poses, nb), poses[i], spacing, radii, covariances[i]);
       if (views[i].pose) {
         const Eigen::Isometry3d delta = views[i].pose->inverse() * T;

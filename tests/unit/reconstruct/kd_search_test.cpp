@@ -10,6 +10,7 @@
 #include <pcl/search/kdtree.h>
 
 #include "cloud_util.h"
+#include "gicp_covariances.h"
 #include "kd_search.h"
 
 using namespace s2c;
@@ -133,4 +134,30 @@ TEST(PointSearch, OutlierRemovalKeepsWhatPclKeeps) {
       EXPECT_EQ(kept[i].z, expected[i].z);
     }
   }
+}
+
+/// PCL's own covariance loop, reachable through a derived class (it is protected).
+struct PclGicp : s2c::Gicp {
+  MatricesVector covariances(const pcl::PointCloud<pcl::PointNormal>::Ptr& cloud) {
+    auto tree = std::make_shared<pcl::search::KdTree<pcl::PointNormal>>();
+    tree->setInputCloud(cloud);
+    k_correspondences_ = s2c::kCovarianceNeighbours;
+    MatricesVector out;
+    computeCovariances<pcl::PointNormal>(cloud, tree, out);
+    return out;
+  }
+};
+
+TEST(PointSearch, GicpCovariancesAreBitForBitPcls) {
+  // Registration hands GICP covariances computed on both cores; GICP must get the matrices its
+  // own serial loop would compute (with PCL's FLANN tree), or the poses would change.
+  const auto cloud = sheet(3000, false, 5);
+  PclGicp pcl_gicp;
+  const auto expected = pcl_gicp.covariances(cloud);
+  const auto got = s2c::gicp_covariances(*cloud);
+  ASSERT_TRUE(got);
+  ASSERT_EQ(got->size(), expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i)
+    for (int k = 0; k < 9; ++k) ASSERT_EQ((*got)[i](k), expected[i](k)) << "point " << i << ", entry " << k;
+  EXPECT_FALSE(s2c::gicp_covariances(*sheet(s2c::kCovarianceNeighbours - 1, false)));
 }
