@@ -1,5 +1,7 @@
 #include "gicp_covariances.h"
 
+#include <atomic>
+
 #include <Eigen/SVD>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -18,6 +20,7 @@ Gicp::MatricesVectorPtr gicp_covariances(const pcl::PointCloud<pcl::PointNormal>
   if (cloud.size() < static_cast<std::size_t>(kCovarianceNeighbours)) return nullptr;
   auto out = std::make_shared<Gicp::MatricesVector>(cloud.size());
   const PointIndex<pcl::PointNormal> index(cloud);
+  std::atomic<bool> short_answer{false};  // a non-finite point, or fewer than k finite ones
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cloud.size(), 512), [&](const auto& range) {
     pcl::Indices nn;
     std::vector<float> sq;
@@ -25,7 +28,10 @@ Gicp::MatricesVectorPtr gicp_covariances(const pcl::PointCloud<pcl::PointNormal>
       Eigen::Matrix3d& cov = (*out)[i];
       cov.setZero();
       Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      index.knn(cloud[i].data, kCovarianceNeighbours, nn, sq);
+      if (index.knn(cloud[i].data, kCovarianceNeighbours, nn, sq) < kCovarianceNeighbours) {
+        short_answer = true;
+        continue;
+      }
       for (int j = 0; j < kCovarianceNeighbours; ++j) {
         const pcl::PointNormal& q = cloud[static_cast<std::size_t>(nn[j])];
         mean[0] += q.x;
@@ -56,7 +62,7 @@ Gicp::MatricesVectorPtr gicp_covariances(const pcl::PointCloud<pcl::PointNormal>
       }
     }
   });
-  return out;
+  return short_answer ? nullptr : out;
 }
 
 }  // namespace s2c

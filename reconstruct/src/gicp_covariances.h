@@ -12,7 +12,8 @@ constexpr int kCovarianceNeighbours = 10;
 /// GICP's point covariances of `cloud`, as pcl::GeneralizedIterativeClosestPoint computes them
 /// for k = kCovarianceNeighbours (same neighbours, same sums in the same order, the same SVD: the
 /// same matrices bit for bit), but on both cores: PCL's serial loop was 60 % of the registration
-/// step. Null for a cloud of fewer than k points (GICP then reports the error itself).
+/// step. Null when a point has fewer than k finite neighbours (a cloud of fewer than k points,
+/// a non-finite point): GICP cannot run on it.
 Gicp::MatricesVectorPtr gicp_covariances(const pcl::PointCloud<pcl::PointNormal>& cloud);
 
 }  // namespace s2c

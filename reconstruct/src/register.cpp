@@ -6,7 +6,6 @@
 
 #include <fmt/format.h>
 #include <Eigen/Geometry>
-#include <Eigen/SVD>
 #include <pcl/common/transforms.h>
 #include <pcl/features/fpfh_omp.h>
 #include <pcl/features/normal_3d.h>
@@ -14,7 +13,6 @@
 #include <pcl/registration/gicp.h>
 #include <pcl/registration/sample_consensus_prerejective.h>
 #include <spdlog/spdlog.h>
-#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "s2c/core/errors.h"
@@ -122,6 +120,11 @@ Fit evaluate(const CloudPN& source, const Eigen::Isometry3d& pose, const CloudPN
 Eigen::Isometry3d icp_refine(const CloudPN::Ptr& source, const CloudPN::Ptr& target, const Eigen::Isometry3d& init,
                              double spacing, const std::vector<double>& radii,
                              Gicp::MatricesVectorPtr source_covariances = nullptr) {
+  // Too few points for a covariance (PCL's GICP would read an empty covariance list): nothing to
+  // refine against, the pose stays.
+  if (!source_covariances) source_covariances = gicp_covariances(*source);
+  const Gicp::MatricesVectorPtr target_covariances = gicp_covariances(*target);
+  if (!source_covariances || !target_covariances) return init;
   Eigen::Matrix4f guess = init.matrix().cast<float>();
   Gicp gicp;
   gicp.setSearchMethodTarget(std::make_shared<NanoSearch<PN>>());
@@ -129,11 +132,8 @@ Eigen::Isometry3d icp_refine(const CloudPN::Ptr& source, const CloudPN::Ptr& tar
   gicp.setInputSource(source);
   gicp.setInputTarget(target);
   gicp.setCorrespondenceRandomness(kCovarianceNeighbours);
-  if (!source_covariances) source_covariances = gicp_covariances(*source);
-  if (auto target_covariances = gicp_covariances(*target); source_covariances && target_covariances) {
-    gicp.setSourceCovariances(source_covariances);
-    gicp.setTargetCovariances(target_covariances);
-  }
+  gicp.setSourceCovariances(source_covariances);
+  gicp.setTargetCovariances(target_covariances);
   for (double f : radii) {
     gicp.setMaxCorrespondenceDistance(f * spacing);
     gicp.setMaximumIterations(30);
@@ -230,6 +230,12 @@ std::vector<Eigen::Isometry3d> register_views(const std::vector<View>& views, do
   tbb::parallel_for(0, n, [&](int i) { fine[i] = prepare(views[i], voxel); });
   std::vector<char> placed(n, 0);
   spdlog::debug("registration: {} views, {} points each after thinning (voxel {:.3f} mm)", n, fine[0]->size(), voxel);
+  // Each view's GICP covariances, in its own frame: computed once, for every alignment of it.
+  std::vector<Gicp::MatricesVectorPtr> covariances(n);
+  auto covariances_of = [&](int i) {
+    if (!covariances[i]) covariances[i] = gicp_covariances(*fine[i]);
+    return covariances[i];
+  };
 
   if (mode == RegistrationMode::global) {
     // Place view 0, then each next view against everything placed so far.
@@ -246,7 +252,8 @@ std::vector<Eigen::Isometry3d> register_views(const std::vector<View>& views, do
       progress.advance();
       // A sequence moves little between frames: try starting from the previous placed view's
       // pose; only a clear fit is taken, anything else goes to the global search.
-      const Eigen::Isometry3d T_seq = icp_refine(fine[i], target_fine, poses[done.back()], spacing, radii);
+      const Eigen::Isometry3d T_seq =
+          icp_refine(fine[i], target_fine, poses[done.back()], spacing, radii, covariances_of(i));
       const Fit seq_fit = evaluate(*fine[i], T_seq, target_fine, voxel);
       spdlog::debug("view {}: from the previous pose overlap {:.2f}, rms {:.3f} mm", i, seq_fit.overlap, seq_fit.rms);
       if (seq_fit.overlap >= 0.5 && seq_fit.rms <= 2.0 * spacing) {
@@ -260,7 +267,7 @@ std::vector<Eigen::Isometry3d> register_views(const std::vector<View>& views, do
         report[i].reason = "no global alignment found (too little overlap or too few distinct features)";
         continue;
       }
-      const Eigen::Isometry3d T = icp_refine(fine[i], target_fine, *T0, spacing, radii);
+      const Eigen::Isometry3d T = icp_refine(fine[i], target_fine, *T0, spacing, radii, covariances_of(i));
       const Fit fit = evaluate(*fine[i], T, target_fine, voxel);
       if (fit.overlap < o.min_overlap) {
         report[i].rejected = true;
@@ -282,7 +289,6 @@ std::vector<Eigen::Isometry3d> register_views(const std::vector<View>& views, do
   // but moved the poses enough to change the features found on the fixture scans downstream
   // (stop 29, bench/README.md).
   const int rounds = o.rounds;
-  std::vector<Gicp::MatricesVectorPtr> covariances(n);
   Progress progress("refine", static_cast<std::size_t>(rounds) * n);
   for (int round = 0; round < rounds; ++round)
     for (int i = 0; i < n; ++i) {
@@ -290,8 +296,8 @@ std::vector<Eigen::Isometry3d> register_views(const std::vector<View>& views, do
       if (!placed[i] || (mode == RegistrationMode::global && i == 0)) continue;
       const auto nb = neighbours_of(i, poses, placed, o.neighbours);
       if (nb.empty()) continue;
-      if (!covariances[i]) covariances[i] = gicp_covariances(*fine[i]);
-      const Eigen::Isometry3d T = icp_refine(fine[i], union_of(fine, poses, nb), poses[i], spacing, radii, covariances[i]);
+      const Eigen::Isometry3d T =
+          icp_refine(fine[i], union_of(fine, poses, nb), poses[i], spacing, radii, covariances_of(i));
       if (views[i].pose) {
         const Eigen::Isometry3d delta = views[i].pose->inverse() * T;
         if (angle_deg(delta.rotation()) > o.max_correction_deg) {

@@ -136,10 +136,11 @@ TEST(PointSearch, OutlierRemovalKeepsWhatPclKeeps) {
   }
 }
 
-/// PCL's own covariance loop, reachable through a derived class (it is protected).
+/// PCL's own covariance loop, reachable through a derived class (it is protected), on PCL's
+/// FLANN tree or on the search registration hands GICP (NanoSearch).
 struct PclGicp : s2c::Gicp {
-  MatricesVector covariances(const pcl::PointCloud<pcl::PointNormal>::Ptr& cloud) {
-    auto tree = std::make_shared<pcl::search::KdTree<pcl::PointNormal>>();
+  MatricesVector covariances(const pcl::PointCloud<pcl::PointNormal>::Ptr& cloud,
+                             pcl::search::KdTree<pcl::PointNormal>::Ptr tree) {
     tree->setInputCloud(cloud);
     k_correspondences_ = s2c::kCovarianceNeighbours;
     MatricesVector out;
@@ -152,12 +153,17 @@ TEST(PointSearch, GicpCovariancesAreBitForBitPcls) {
   // Registration hands GICP covariances computed on both cores; GICP must get the matrices its
   // own serial loop would compute (with PCL's FLANN tree), or the poses would change.
   const auto cloud = sheet(3000, false, 5);
-  PclGicp pcl_gicp;
-  const auto expected = pcl_gicp.covariances(cloud);
   const auto got = s2c::gicp_covariances(*cloud);
   ASSERT_TRUE(got);
-  ASSERT_EQ(got->size(), expected.size());
-  for (std::size_t i = 0; i < expected.size(); ++i)
-    for (int k = 0; k < 9; ++k) ASSERT_EQ((*got)[i](k), expected[i](k)) << "point " << i << ", entry " << k;
+  PclGicp pcl_gicp;
+  for (const auto& tree : {std::make_shared<pcl::search::KdTree<pcl::PointNormal>>(),
+                           pcl::search::KdTree<pcl::PointNormal>::Ptr(std::make_shared<NanoSearch<pcl::PointNormal>>())}) {
+    const auto expected = pcl_gicp.covariances(cloud, tree);
+    ASSERT_EQ(got->size(), expected.size());
+    for (std::size_t i = 0; i < expected.size(); ++i)
+      for (int k = 0; k < 9; ++k) ASSERT_EQ((*got)[i](k), expected[i](k)) << "point " << i << ", entry " << k;
+  }
+  // Too few points, or a non-finite one: no covariances (GICP cannot run on them).
   EXPECT_FALSE(s2c::gicp_covariances(*sheet(s2c::kCovarianceNeighbours - 1, false)));
+  EXPECT_FALSE(s2c::gicp_covariances(*sheet(200, true)));
 }

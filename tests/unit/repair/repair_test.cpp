@@ -172,11 +172,11 @@ TEST(Decimate, TheToleranceIsADistanceOnAFineMesh) {
   EXPECT_LT(worst, tolerance);  // 0.0026 mm; 0.0188 mm with area-weighted quadrics
 }
 
-/// Compares the repair's link condition with OpenMesh's own on every live halfedge of `m`;
-/// returns how many collapses it refused.
+/// Compares the repair's link condition with OpenMesh's own on every halfedge of `m`, deleted
+/// ones included; returns how many collapses it refused.
 int expect_link_condition_matches_openmesh(Mesh& m, const char* what) {
   int refused = 0;
-  for (auto h : m.halfedges()) {
+  for (auto h : m.all_halfedges()) {
     const bool ours = collapse_keeps_topology(m, h);
     EXPECT_EQ(ours, m.is_collapse_ok(h)) << what << ", halfedge " << h.idx();
     refused += !ours;
@@ -209,6 +209,26 @@ TEST(Decimate, LinkConditionIsOpenMeshs) {
   Mesh box;
   soup_to_mesh(test::cube(1.0), box);
   expect_link_condition_matches_openmesh(box, "cube");
+  // Two triangles back to back: both sides of every edge have the same far vertex.
+  TriangleSoup pillow;
+  pillow.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  pillow.faces = {{0, 1, 2}, {0, 2, 1}};
+  Mesh two;
+  soup_to_mesh(pillow, two);
+  ASSERT_EQ(two.n_faces(), 2u);
+  EXPECT_GT(expect_link_condition_matches_openmesh(two, "two triangles back to back"), 0);
+  // A strip one quad wide: every vertex on the boundary, so its rungs and diagonals are interior
+  // edges between two boundary vertices.
+  TriangleSoup ladder;
+  for (int i = 0; i <= 5; ++i) ladder.vertices.emplace_back(i, 0, 0), ladder.vertices.emplace_back(i, 1, 0);
+  for (int i = 0; i < 5; ++i) {
+    const int a = 2 * i, b = a + 1, c = a + 2, d = a + 3;
+    ladder.faces.push_back({a, c, d});
+    ladder.faces.push_back({a, d, b});
+  }
+  Mesh strip;
+  soup_to_mesh(ladder, strip);
+  EXPECT_GT(expect_link_condition_matches_openmesh(strip, "strip"), 0);
   // After collapses (deleted edges and vertices, new valences), the comparison again.
   std::mt19937 rng(7);
   for (int step = 0; step < 40; ++step) {
