@@ -115,14 +115,13 @@ Fit evaluate(const CloudPN& source, const Eigen::Isometry3d& pose, const CloudPN
 // Generalized ICP (plane-to-plane), coarse to fine: correspondence radii shrink to the last of
 // `radii` × spacing. On partial overlaps of machined parts it converged markedly closer than
 // PCL's symmetric point-to-plane ICP (tests/unit/reconstruct: worst misfit 1.05 vs 1.51 mm
-// from 0.5° / 0.3 mm pose errors). `source_covariances`, when given, are the source's (a view
-// is refined in several passes; its covariances, in its own frame, do not change).
+// from 0.5° / 0.3 mm pose errors). `source_covariances` are the source's, computed once per
+// view (a view is aligned several times; its covariances, in its own frame, do not change).
 Eigen::Isometry3d icp_refine(const CloudPN::Ptr& source, const CloudPN::Ptr& target, const Eigen::Isometry3d& init,
                              double spacing, const std::vector<double>& radii,
-                             Gicp::MatricesVectorPtr source_covariances = nullptr) {
+                             const Gicp::MatricesVectorPtr& source_covariances) {
   // Too few points for a covariance (PCL's GICP would read an empty covariance list): nothing to
   // refine against, the pose stays.
-  if (!source_covariances) source_covariances = gicp_covariances(*source);
   const Gicp::MatricesVectorPtr target_covariances = gicp_covariances(*target);
   if (!source_covariances || !target_covariances) return init;
   Eigen::Matrix4f guess = init.matrix().cast<float>();
@@ -232,7 +231,7 @@ std::vector<Eigen::Isometry3d> register_views(const std::vector<View>& views, do
   spdlog::debug("registration: {} views, {} points each after thinning (voxel {:.3f} mm)", n, fine[0]->size(), voxel);
   // Each view's GICP covariances, in its own frame: computed once, for every alignment of it.
   std::vector<Gicp::MatricesVectorPtr> covariances(n);
-  auto covariances_of = [&](int i) {
+  auto covariances_of = [&](int i) -> const Gicp::MatricesVectorPtr& {
     if (!covariances[i]) covariances[i] = gicp_covariances(*fine[i]);
     return covariances[i];
   };
