@@ -6,6 +6,21 @@
 
 namespace s2c::test {
 
+TriangleSoup grid(int n, const std::function<bool(int, int)>& keep,
+                  const std::function<Eigen::Vector3d(double, double)>& place) {
+  TriangleSoup s;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j) s.vertices.push_back(place ? place(i, j) : Eigen::Vector3d(i, j, 0));
+  auto v = [n](int i, int j) { return i * (n + 1) + j; };
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      if (!keep(i, j)) continue;
+      s.faces.push_back({v(i, j), v(i + 1, j), v(i + 1, j + 1)});
+      s.faces.push_back({v(i, j), v(i + 1, j + 1), v(i, j + 1)});
+    }
+  return s;
+}
+
 TriangleSoup icosphere(const Eigen::Vector3d& center, double radius, int levels) {
   TriangleSoup s;
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;

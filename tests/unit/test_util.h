@@ -65,6 +65,12 @@ inline void expect_invalid_input(const std::function<void()>& f, std::initialize
   }
 }
 
+/// A flat (n x n)-square grid in z = 0, vertex (i, j) at index i * (n + 1) + j, each square
+/// split into two counter-clockwise triangles; squares with keep(i, j) == false are left out.
+/// `place` maps grid coordinates to space (to tilt or bend the grid).
+TriangleSoup grid(int n, const std::function<bool(int, int)>& keep,
+                  const std::function<Eigen::Vector3d(double, double)>& place = nullptr);
+
 /// Icosphere: subdivided icosahedron projected to the sphere (outward).
 TriangleSoup icosphere(const Eigen::Vector3d& center, double radius, int levels);
 

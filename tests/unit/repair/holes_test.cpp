@@ -14,26 +14,9 @@ using namespace s2c;
 using repair::find_holes;
 using repair::Hole;
 using repair::HoleStats;
+using test::grid;
 
 namespace {
-
-/// A flat (n x n)-square grid in z = 0, vertex (i, j) at index i * (n + 1) + j, each square
-/// split into two counter-clockwise triangles; squares with keep(i, j) == false are left out.
-/// `place` maps grid coordinates to space (to tilt or bend the grid).
-TriangleSoup grid(int n, const std::function<bool(int, int)>& keep,
-                  const std::function<Eigen::Vector3d(double, double)>& place = nullptr) {
-  TriangleSoup s;
-  for (int i = 0; i <= n; ++i)
-    for (int j = 0; j <= n; ++j) s.vertices.push_back(place ? place(i, j) : Eigen::Vector3d(i, j, 0));
-  auto v = [n](int i, int j) { return i * (n + 1) + j; };
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      if (!keep(i, j)) continue;
-      s.faces.push_back({v(i, j), v(i + 1, j), v(i + 1, j + 1)});
-      s.faces.push_back({v(i, j), v(i + 1, j + 1), v(i, j + 1)});
-    }
-  return s;
-}
 
 bool in_block(int i, int j, int i0, int i1, int j0, int j1) { return i >= i0 && i < i1 && j >= j0 && j < j1; }
 

@@ -191,18 +191,8 @@ TEST(Decimate, LinkConditionIsOpenMeshs) {
   soup_to_mesh(test::icosphere({0, 0, 0}, 1, 2), sphere);
   expect_link_condition_matches_openmesh(sphere, "icosphere");
   // An open grid: boundary vertices and edges, corner triangles with two boundary edges.
-  TriangleSoup grid;
-  const int n = 6;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) grid.vertices.emplace_back(i, j, 0);
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
-      grid.faces.push_back({a, b, d});
-      grid.faces.push_back({a, d, c});
-    }
   Mesh open;
-  soup_to_mesh(grid, open);
+  soup_to_mesh(test::grid(6, [](int, int) { return true; }), open);
   // Corner triangles (two boundary edges) and interior edges between boundary vertices: refused.
   EXPECT_GT(expect_link_condition_matches_openmesh(open, "grid"), 0);
   // A cube: so few vertices that most collapses would join two faces back to back.
