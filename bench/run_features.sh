@@ -114,7 +114,8 @@ for section in $sections; do
             echo "*scan $scan: scan2cad-reconstruct / scan2cad-repair not built, skipped*"
             continue
           fi
-          "$bin/scan2cad" reconstruct "fixtures/scans/$scan" -o "$dir/mesh.ply" -q 2>"$dir/reconstruct.log" &&
+          # shellcheck disable=SC2086
+          "$bin/scan2cad" reconstruct "fixtures/scans/$scan" -o "$dir/mesh.ply" -q ${RECON_ARGS:-} 2>"$dir/reconstruct.log" &&
             "$bin/scan2cad" repair "$dir/mesh.ply" -o "$dir/repaired.ply" -q 2>"$dir/repair.log" ||
             { echo "*scan $scan: reconstruct/repair failed (logs in $dir)*"; continue; }
         fi

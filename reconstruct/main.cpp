@@ -18,7 +18,9 @@ int main(int argc, char** argv) {
       "views), views without poses are aligned globally (FPFH + RANSAC) first.\n"
       "Every length defaults from the measured point spacing. Surface the scanner never saw is\n"
       "trimmed away and stays open for repair.\n"
+      "Meshers: poisson (default, PCL) or imls (about 4x faster; features find more on its meshes).\n"
       "Examples: scan2cad reconstruct fixtures/scans/plate -o mesh.ply --cloud-out cloud.ply\n"
+      "          scan2cad reconstruct fixtures/scans/plate -o mesh.ply --method imls\n"
       "          scan2cad reconstruct bun000.ply bun045.ply bun090.ply --input-unit-mm 1000 -o bunny.ply\n"
       "          scan2cad reconstruct tum_folder --intrinsics 517.3,516.5,318.6,255.3 -o room.ply",
       "scan2cad-reconstruct"};
@@ -31,14 +33,19 @@ int main(int argc, char** argv) {
   app.add_option("--cloud-out", cloud_out, "Also write the fused cloud with normals (.ply)");
   app.add_option("--method", method,
                  "poisson (one surface, trimmed to the data), gp3 (greedy projection of the fused cloud), "
-                 "organized (each frame on its pixel grid, concatenated)")
-      ->check(CLI::IsMember({"poisson", "gp3", "organized"}))->capture_default_str();
+                 "organized (each frame on its pixel grid, concatenated), imls (implicit moving least squares of the "
+                 "fused cloud on a sparse grid, Marching Cubes: the fastest)")
+      ->check(CLI::IsMember({"poisson", "gp3", "organized", "imls"}))->capture_default_str();
   double mls = -1;
   app.add_option("--mls", mls, "Smooth the fused cloud by moving least squares with this radius, mm "
                  "(0 = 3 × spacing; default off)")->type_name("MM");
-  app.add_option("--voxel", o.voxel_mm, "Fusion voxel size, mm (default: measured point spacing)");
+  app.add_option("--voxel", o.voxel_mm, "Fusion voxel size, mm (default: measured point spacing; imls: 1.5 × spacing, also its grid)");
   app.add_option("--depth", o.poisson_depth, "Poisson octree depth (default: from spacing and size)");
   app.add_option("--trim", o.trim_mm, "Drop surface farther than this from the data, mm (default: 3 × spacing)");
+  app.add_option("--support", o.imls_support_mm, "imls: support radius of a point, mm (default: 2.5 × voxel)");
+  app.add_option("--simplify", o.simplify_mm,
+                 "imls: decimate the mesh, moving the surface by at most this, mm (default: voxel / 10; 0 = off, "
+                 "the fastest)")->type_name("MM");
   app.add_option("--outliers", o.outlier_sigma,
                  "Statistical outlier removal threshold in standard deviations (0 = off)")->capture_default_str();
   app.add_option("--register", registration,
@@ -66,7 +73,9 @@ int main(int argc, char** argv) {
                           : registration == "off"    ? s2c::RegistrationMode::off
                                                      : s2c::RegistrationMode::automatic;
     o.method = method == "gp3" ? s2c::MeshMethod::gp3
-               : method == "organized" ? s2c::MeshMethod::organized : s2c::MeshMethod::poisson;
+               : method == "organized" ? s2c::MeshMethod::organized
+               : method == "imls"      ? s2c::MeshMethod::imls
+                                       : s2c::MeshMethod::poisson;
     s2c::Report report("scan2cad-reconstruct");
     s2c::ReconstructReport r;
     if (app.count("--mls")) o.mls_radius_mm = mls > 0 ? mls : -1;  // -1: from the spacing
@@ -89,7 +98,8 @@ int main(int argc, char** argv) {
     report.parameters() = {{"input", inputs}, {"output", output}, {"method", method}, {"register", registration},
                            {"voxel_mm", r.voxel_mm},
                            {"poisson_depth", r.poisson_depth}, {"poisson_block_depth", r.poisson_block_depth}, {"trim_mm", r.trim_mm},
-                           {"normal_neighbours", o.normal_neighbours}, {"outlier_sigma", o.outlier_sigma}, {"mls_radius_mm", r.mls_radius_mm}};
+                           {"normal_neighbours", o.normal_neighbours}, {"outlier_sigma", o.outlier_sigma}, {"mls_radius_mm", r.mls_radius_mm},
+                           {"imls_support_mm", r.imls_support_mm}, {"simplify_mm", r.simplify_mm}};
     report.counts() = {{"frames", r.frames}, {"points_in", r.points_in}, {"points_fused", r.points_fused},
                        {"outliers_removed", r.outliers_removed}, {"spacing_mm", r.spacing_mm},
                        {"faces_before_trim", r.faces_before_trim}, {"faces", r.faces}, {"vertices", r.vertices}};

@@ -117,10 +117,12 @@ std::vector<Stage> plan(const RunOptions& o, InputKind kind, fs::path& final_mes
   }
   fs::path mesh = kind == InputKind::mesh ? o.input : fs::path();
   if (kind != InputKind::mesh) {
-    if (add({"reconstruct", "scan2cad-reconstruct",
-             {o.input.string(), "-o", (d / "mesh.ply").string(), "--cloud-out", (d / "cloud.ply").string()},
-             {o.input}, {d / "mesh.ply", d / "cloud.ply"}, {}}))
-      mesh = d / "mesh.ply";
+    Stage s{"reconstruct", "scan2cad-reconstruct",
+            {o.input.string(), "-o", (d / "mesh.ply").string(), "--cloud-out", (d / "cloud.ply").string()},
+            {o.input}, {d / "mesh.ply", d / "cloud.ply"}, {}};
+    // Only when asked: the default's command (and so earlier runs' manifests) stays as it was.
+    if (o.mesher != "poisson") s.args.insert(s.args.end(), {"--method", o.mesher});
+    if (add(std::move(s))) mesh = d / "mesh.ply";
   }
   if (!mesh.empty() && add({"repair", "scan2cad-repair", {mesh.string(), "-o", (d / "repaired.ply").string()}, {mesh},
                             {d / "repaired.ply"}, {}}))

@@ -24,6 +24,7 @@ struct RunOptions {
   std::filesystem::path edit_script;  // empty: no edit stage
   std::filesystem::path reference;    // empty: no deviation map
   std::filesystem::path bin_dir;      // where the scan2cad-* executables are
+  std::string mesher = "poisson";      // reconstruct --method: poisson | imls
   bool force = false;
   bool quiet = false;
 };

@@ -1,6 +1,7 @@
 // Implementation of the shared test helpers, linked into every test executable.
 #include <cmath>
 #include <map>
+#include <random>
 
 #include "test_util.h"
 
@@ -82,6 +83,28 @@ TriangleSoup revolved(const std::function<double(double)>& r, const std::vector<
     if (close_top) s.faces.push_back({top, id(i, rows - 1), id(i + 1, rows - 1)});
   }
   return s;
+}
+
+OrientedSamples sample_surface(const TriangleSoup& soup, double spacing, double sigma, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::normal_distribution<double> noise(0, sigma > 0 ? sigma : 1);
+  OrientedSamples o;
+  for (const auto& f : soup.faces) {
+    const Eigen::Vector3d a = soup.vertices[f[0]], b = soup.vertices[f[1]], c = soup.vertices[f[2]];
+    const Eigen::Vector3d cr = (b - a).cross(c - a);
+    const Eigen::Vector3d n = cr.normalized();
+    const double expected = 0.5 * cr.norm() / (spacing * spacing);
+    int count = static_cast<int>(expected);
+    if (u(rng) < expected - count) ++count;
+    for (int k = 0; k < count; ++k) {
+      double r1 = u(rng), r2 = u(rng);
+      if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
+      o.points.push_back(a + r1 * (b - a) + r2 * (c - a) + (sigma > 0 ? noise(rng) : 0.0) * n);
+      o.normals.push_back(n);
+    }
+  }
+  return o;
 }
 
 }  // namespace s2c::test

@@ -80,4 +80,11 @@ TriangleSoup icosphere(const Eigen::Vector3d& center, double radius, int levels)
 TriangleSoup revolved(const std::function<double(double)>& r, const std::vector<double>& zs, int segments,
                       bool close_bottom, bool close_top);
 
+/// Area-uniform samples of a soup, about one per spacing², with the face normal of each; moved
+/// along it by Gaussian noise of `sigma` (0: on the surface). Deterministic for a seed.
+struct OrientedSamples {
+  std::vector<Eigen::Vector3d> points, normals;
+};
+OrientedSamples sample_surface(const TriangleSoup& soup, double spacing, double sigma = 0, unsigned seed = 1);
+
 }  // namespace s2c::test

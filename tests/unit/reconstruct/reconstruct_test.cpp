@@ -186,3 +186,37 @@ TEST(Reconstruct, OrganizedMeshingAndMlsStayOnThePart) {
     }
   }
 }
+
+TEST(Reconstruct, ImlsMeshesAScanCloseToThePartWithoutInventingSurface) {
+  const auto dir = test::scratch_dir();
+  const auto part = read_soup(test::source_dir() / "fixtures/parts/plate.stl");
+  const SurfaceQuery truth(part);
+  const auto scan = small_scan(dir, "plate");
+  std::size_t simplified_faces = 0, raw_faces = 0;
+  for (double simplify : {-1.0, 0.0}) {
+    ReconstructOptions o;
+    o.method = MeshMethod::imls;
+    o.simplify_mm = simplify;
+    ReconstructReport rep;
+    const Reconstruction r = reconstruct({scan}, o, rep);
+    SCOPED_TRACE(simplify < 0 ? "simplified" : "raw");
+    EXPECT_NEAR(rep.voxel_mm, 1.5 * rep.spacing_mm, 1e-12);  // the imls default grid
+    EXPECT_NEAR(rep.imls_support_mm, 2.5 * rep.voxel_mm, 1e-12);
+    const TriangleSoup soup = mesh_to_soup(r.mesh);
+    std::vector<double> d;
+    for (const auto& v : soup.vertices) d.push_back(truth.closest(v)->distance);
+    std::sort(d.begin(), d.end());
+    EXPECT_LT(d[d.size() / 2], 0.05);
+    EXPECT_LT(d[d.size() * 99 / 100], 0.25);
+    // No surface where the scanner saw nothing: the plate's Ø6 holes' walls are unseen, so the
+    // mesh stays open there, as the trimmed Poisson mesh does.
+    const CheckResult c = check_mesh(soup);
+    EXPECT_GT(c.boundary_loops, 0u);
+    EXPECT_EQ(c.nonmanifold_edges, 0u);
+    (simplify < 0 ? simplified_faces : raw_faces) = soup.faces.size();
+    if (simplify < 0) {
+      EXPECT_NEAR(rep.simplify_mm, 0.1 * rep.voxel_mm, 1e-12);
+    }
+  }
+  EXPECT_LT(simplified_faces, raw_faces * 3 / 4);
+}

@@ -11,7 +11,7 @@
 
 namespace s2c {
 
-enum class MeshMethod { poisson, gp3, organized };
+enum class MeshMethod { poisson, gp3, organized, imls };
 
 struct ReconstructOptions {
   InputOptions input;
@@ -26,6 +26,8 @@ struct ReconstructOptions {
   /// looks statistically like outliers (2.5σ cost the pocket fixture 4 % of its coverage).
   double outlier_sigma = 6.0;
   double mls_radius_mm = 0;   ///< moving-least-squares smoothing radius; 0 = off, < 0 = 3 × spacing
+  double imls_support_mm = 0; ///< imls: support radius of a point; 0 = 2.5 × voxel
+  double simplify_mm = -1;    ///< imls: decimation tolerance; 0 = off, < 0 = a tenth of the voxel
 };
 
 struct ReconstructReport {
@@ -34,6 +36,8 @@ struct ReconstructReport {
   double load_s = 0, register_s = 0, fuse_s = 0, mesh_s = 0;  ///< seconds per step
   std::size_t points_in = 0, points_fused = 0, outliers_removed = 0;
   double spacing_mm = 0, voxel_mm = 0, trim_mm = 0, mls_radius_mm = 0;
+  double imls_support_mm = 0;  ///< imls: the support radius used
+  double simplify_mm = 0;      ///< imls: the decimation tolerance used (0: none)
   int poisson_depth = 0;
   int poisson_block_depth = 0;  ///< Poisson solves and extracts in blocks of this octree depth
   std::size_t faces_before_trim = 0, faces = 0, vertices = 0;

@@ -8,6 +8,7 @@
 /// defects, the output is closed, manifold and consistently oriented (where the band reaches
 /// across every hole).
 #include <cstddef>
+#include <vector>
 
 #include "s2c/core/mesh.h"
 
@@ -69,6 +70,28 @@ struct VolumetricStats {
 /// \throw InvalidInput for an empty input, ProcessingError if the grid would be unreasonably large.
 TriangleSoup volumetric_remesh(const TriangleSoup& input, const VolumetricOptions& options,
                                VolumetricStats* stats = nullptr);
+
+/// Meshing an oriented point cloud through the same vector field: each band vertex stores the
+/// vector to the implicit moving-least-squares surface of the points (the weighted mean of their
+/// tangent planes), and Marching Cubes extracts it. Surface only where the data is: a vertex with
+/// less support than `min_support` is outside the band, so unseen regions stay open.
+struct PointContourOptions {
+  double voxel = 0;          ///< grid spacing, mm (> 0)
+  double radius = 0;         ///< support radius of a point, mm; 0 = 2 voxels (below 8 voxels)
+  /// Σ weights the vertex's closest surface point needs (one point at distance 0 weighs 1).
+  double min_support = 0.5;
+  /// The most the closest surface point may lie off the weighted centroid of the points,
+  /// tangentially, as a fraction of the radius: where it lies further the surface would go on
+  /// past the data (a rim, or a fin past a convex edge).
+  double max_offset = 0.5;
+  Interp interp = Interp::hermite;
+};
+
+/// \param normals unit normals, outward (towards the sensor), one per point.
+/// \throw InvalidInput for no points, a size mismatch, non-finite points or a bad voxel/radius.
+TriangleSoup contour_oriented_points(const std::vector<Eigen::Vector3d>& points,
+                                     const std::vector<Eigen::Vector3d>& normals, const PointContourOptions& options,
+                                     VolumetricStats* stats = nullptr);
 
 /// The paper's error measure ε = sqrt( Σ_i dist(v_i, R)² · A(v_i) / (3 A(M)) ), A(v_i) = area of the
 /// faces around v_i, A(M) = area of M: the area-weighted RMS distance of M's vertices to R.
