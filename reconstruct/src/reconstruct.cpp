@@ -215,6 +215,10 @@ Mesh mesh_views_organized(const std::vector<View>& views, const std::vector<Eige
 OrientedCloud fuse_views(const std::vector<View>& views, const std::vector<Eigen::Isometry3d>& poses,
                          const ReconstructOptions& o, ReconstructReport& rep) {
   auto raw = std::make_shared<Cloud>();
+  // Reserved: grown by doubling, the copy of 0.6 M points was the plate's heap peak (50 of 135 MB).
+  std::size_t total = 0;
+  for (const View& v : views) total += v.points.size();
+  raw->reserve(total);
   for (std::size_t i = 0; i < views.size(); ++i) {
     if (i < rep.views.size() && rep.views[i].rejected) continue;
     const View& v = views[i];
