@@ -137,16 +137,4 @@ MeshLayer deviation_layer(TriangleSoup mesh, const Deviation& d, double range) {
   return layer;
 }
 
-double median_edge_length(const TriangleSoup& mesh) {
-  std::vector<double> lengths;
-  const std::size_t stride = std::max<std::size_t>(1, mesh.faces.size() / 20000);
-  for (std::size_t f = 0; f < mesh.faces.size(); f += stride) {
-    const auto& t = mesh.faces[f];
-    for (int k = 0; k < 3; ++k) lengths.push_back((mesh.vertices[t[k]] - mesh.vertices[t[(k + 1) % 3]]).norm());
-  }
-  if (lengths.empty()) return 0;
-  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
-  return lengths[lengths.size() / 2];
-}
-
 }  // namespace s2c::report

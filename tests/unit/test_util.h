@@ -71,6 +71,16 @@ inline void expect_invalid_input(const std::function<void()>& f, std::initialize
 TriangleSoup grid(int n, const std::function<bool(int, int)>& keep,
                   const std::function<Eigen::Vector3d(double, double)>& place = nullptr);
 
+/// `s` rotated so that none of an axis-aligned part's faces lies in a grid plane (faces on grid
+/// planes make linear interpolation exact and hide what a test is after).
+inline TriangleSoup obliquely_rotated(TriangleSoup s, Eigen::Matrix3d* rotation = nullptr) {
+  const Eigen::Matrix3d R = (Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 1, 0).normalized())).toRotationMatrix();
+  for (auto& v : s.vertices) v = R * v;
+  if (rotation) *rotation = R;
+  return s;
+}
+
 /// Icosphere: subdivided icosahedron projected to the sphere (outward).
 TriangleSoup icosphere(const Eigen::Vector3d& center, double radius, int levels);
 

@@ -102,19 +102,6 @@ double median_edge_around(const TriangleSoup& soup, const MeshIndex& index, cons
   return lengths[lengths.size() / 2];
 }
 
-// Median edge length of the soup, from up to ~20 k faces spread over it.
-double median_edge(const TriangleSoup& soup) {
-  std::vector<double> lengths;
-  const std::size_t step = std::max<std::size_t>(1, soup.faces.size() / 20000);
-  for (std::size_t f = 0; f < soup.faces.size(); f += step) {
-    const auto& t = soup.faces[f];
-    for (int i = 0; i < 3; ++i) lengths.push_back((soup.vertices[t[i]] - soup.vertices[t[(i + 1) % 3]]).norm());
-  }
-  if (lengths.empty()) return 0;
-  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
-  return lengths[lengths.size() / 2];
-}
-
 // Liepa's candidates, best first: the faired patch, then the refined one before fairing (its
 // vertices are centroids of valid triangles, so it survives where fairing folds a patch).
 bool build_liepa(const TriangleSoup& soup, const MeshIndex& index, Patch& p, const HoleShape& shape,
@@ -269,7 +256,7 @@ Plan plan_hole(const TriangleSoup& soup, const MeshIndex& index, const Hole& hol
   // grid nodes) can have a rim median of a tenth of its edges; a cap refined to it had 1.3 M
   // faces (the imls shaft scan): half the mesh's median edge is the floor.
   if (hole.end_cap && !(options.edge_length > 0))
-    plan.shape.edge = std::max(median_edge_around(soup, index, loop), 0.5 * median_edge(soup));
+    plan.shape.edge = std::max(median_edge_around(soup, index, loop), 0.5 * median_edge_length(soup));
   plan.shape.flat_fill =
       hole.end_cap || (plan.shape.planar && (plan.shape.wall_angle_deg < 10 || plan.shape.wall_angle_deg > 60));
   const HoleShape& shape = plan.shape;

@@ -39,10 +39,8 @@ TEST(PointContour, SphereSamplesGiveAClosedSphere) {
 TEST(PointContour, NoisyPlanesAreAveragedAndCornersStayClose) {
   // A rotated box (faces off the grid planes), σ = 0.05 mm along the normals at 0.17 mm spacing:
   // what the fixture scans give the mesher.
-  TriangleSoup box = test::cube(20);
-  const Eigen::Matrix3d R = (Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()) *
-                             Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 1, 0).normalized())).toRotationMatrix();
-  for (auto& v : box.vertices) v = R * v;
+  Eigen::Matrix3d R;
+  const TriangleSoup box = test::obliquely_rotated(test::cube(20), &R);
   const Oriented o = sample(box, 0.17, 0.05);
   PointContourOptions opt;
   opt.voxel = 0.25;

@@ -146,10 +146,7 @@ TEST(Volumetric, RemeshesASphereClosedAndClose) {
 
 TEST(Volumetric, VectorInterpolationKeepsACubeSharperThanLinear) {
   // A rotated cube: its faces are not grid planes, so linear interpolation is not exact.
-  TriangleSoup s = test::cube(10);
-  const Eigen::Matrix3d R = (Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()) *
-                             Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 1, 0).normalized())).toRotationMatrix();
-  for (auto& v : s.vertices) v = R * v;
+  const TriangleSoup s = test::obliquely_rotated(test::cube(10));
   VolumetricOptions o;
   o.voxel = 0.7;
   o.interp = Interp::linear;

@@ -51,6 +51,10 @@ struct Bounds {
 Bounds bounds(const TriangleSoup& soup);
 Bounds bounds(const Mesh& mesh);
 
+/// The median edge length of the faces, mm (0 without faces), from up to ~20 k faces spread over
+/// the mesh.
+double median_edge_length(const TriangleSoup& mesh);
+
 /// Key of the undirected edge {a, b} (the smaller index in the high 32 bits).
 inline std::uint64_t undirected_edge_key(int a, int b) {
   if (a > b) std::swap(a, b);

@@ -37,7 +37,4 @@ void add_features(Scene& scene, TriangleSoup mesh, const features::FeatureSet& f
 /// `mesh` coloured per vertex by its signed deviation (deviation_colour over ±range).
 MeshLayer deviation_layer(TriangleSoup mesh, const Deviation& deviation, double range);
 
-/// The median edge length of the faces, mm (0 without faces).
-double median_edge_length(const TriangleSoup& mesh);
-
 }  // namespace s2c::report
