@@ -135,12 +135,15 @@ View view_of_cloud(const fs::path& path, const InputOptions& o) {
   pcl::PCLPointCloud2 blob;
   const std::string ext = path.extension().string();
   int rc = -1;
+  Eigen::Vector4f origin = Eigen::Vector4f::Zero();  // PCD's VIEWPOINT: where the sensor was
+  Eigen::Quaternionf orientation = Eigen::Quaternionf::Identity();
   // PCL allocates what a header promises: check it against the file first (exit 2, not an OOM kill).
   if (ext == ".pcd") check_pcd_header(path);
   else if (ext == ".ply") check_mesh_header(path);
   else throw InvalidInput(fmt::format("{}: a cloud must be .ply or .pcd", path.string()));
   try {
-    rc = ext == ".pcd" ? pcl::io::loadPCDFile(path.string(), blob) : pcl::io::loadPLYFile(path.string(), blob);
+    rc = ext == ".pcd" ? pcl::io::loadPCDFile(path.string(), blob, origin, orientation)
+                       : pcl::io::loadPLYFile(path.string(), blob);
   } catch (const std::exception& e) {  // PCL's readers throw on some malformed headers (found by fuzzing)
     throw InvalidInput(fmt::format("{}: cannot be read as a point cloud: {}", path.string(), e.what()));
   }
@@ -160,7 +163,15 @@ View view_of_cloud(const fs::path& path, const InputOptions& o) {
     const auto& p = cloud[i];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;  // organized holes are NaN
     v.points.emplace_back(p.x * o.input_unit_mm, p.y * o.input_unit_mm, p.z * o.input_unit_mm);
-    if (v.width) v.pixel.push_back(static_cast<int>(i));
+    if (v.width) {
+      v.pixel.push_back(static_cast<int>(i));
+      // An organized cloud is one view: every point was seen from the sensor's origin, which
+      // orients its normals (otherwise they face away from the centroid, wrong for a table seen
+      // from above).
+      const Eigen::Vector3d sensor = origin.head<3>().cast<double>() * o.input_unit_mm;
+      const Eigen::Vector3d d = sensor - v.points.back();
+      v.to_sensor.push_back(d.norm() > 0 ? Eigen::Vector3d(d.normalized()) : Eigen::Vector3d::Zero());
+    }
   }
   if (v.points.size() < 10)
     throw InvalidInput(fmt::format("{}: only {} finite points", path.string(), v.points.size()));

@@ -1,6 +1,8 @@
 // reconstruct: loading every input kind, registration against known poses, fusion, meshing.
 #include <random>
 
+#include <fmt/format.h>
+
 #include "../test_util.h"
 #include "s2c/acquire/simulate.h"
 #include "s2c/core/check.h"
@@ -219,4 +221,32 @@ TEST(Reconstruct, ImlsMeshesAScanCloseToThePartWithoutInventingSurface) {
     }
   }
   EXPECT_LT(simplified_faces, raw_faces * 3 / 4);
+}
+
+TEST(Reconstruct, AnOrganizedCloudIsSeenFromItsViewpoint) {
+  // A 4×3 organized PCD (one NaN) with the sensor at (0, 0, -100) mm: each point's direction to
+  // the sensor orients its normal; an unorganized PLY has no sensor (empty).
+  const auto dir = test::scratch_dir();
+  std::string pcd = "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 4\nHEIGHT 3\n"
+                    "VIEWPOINT 0 0 -100 1 0 0 0\nPOINTS 12\nDATA ascii\n";
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) pcd += (r == 1 && c == 2) ? "nan nan nan\n" : fmt::format("{} {} 50\n", c * 10, r * 10);
+  test::write_text(dir / "organized.pcd", pcd);
+  const auto views = load_views({dir / "organized.pcd"}, {});
+  ASSERT_EQ(views.size(), 1u);
+  const View& v = views[0];
+  ASSERT_EQ(v.points.size(), 11u);
+  ASSERT_EQ(v.to_sensor.size(), 11u);
+  for (std::size_t i = 0; i < v.points.size(); ++i) {
+    const Eigen::Vector3d expected = (Eigen::Vector3d(0, 0, -100) - v.points[i]).normalized();
+    EXPECT_LT((v.to_sensor[i] - expected).norm(), 1e-9) << i;
+  }
+  test::write_text(dir / "loose.ply", "ply\nformat ascii 1.0\nelement vertex 12\nproperty float x\nproperty float y\n"
+                                       "property float z\nend_header\n" +
+                                           [] {
+                                             std::string s;
+                                             for (int k = 0; k < 12; ++k) s += fmt::format("{} {} 50\n", k % 4, k / 4);
+                                             return s;
+                                           }());
+  EXPECT_TRUE(load_views({dir / "loose.ply"}, {})[0].to_sensor.empty());
 }
