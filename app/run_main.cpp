@@ -40,7 +40,7 @@ int main(int argc, char** argv) {
   app.add_option("--reference", reference, "The true part (same coordinates as the scan), for a deviation map in report.html");
   app.add_option("--mesher", o.mesher,
                  "Reconstruction mesher: poisson (PCL's Poisson, trimmed) or imls (implicit moving least squares "
-                 "on a sparse grid: about 4x faster reconstruction, README's reconstruct section has the trade-off)")
+                 "on a sparse grid: 2-4x faster reconstruction, made for scans whose noise is small against the point spacing; README's reconstruct section has the trade-off)")
       ->check(CLI::IsMember({"poisson", "imls"}))->capture_default_str();
   app.add_flag("--force", o.force, "Run every stage even if up to date");
   s2c::add_common_options(app, common);
