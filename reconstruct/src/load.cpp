@@ -163,11 +163,11 @@ View view_of_cloud(const fs::path& path, const InputOptions& o) {
     const auto& p = cloud[i];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;  // organized holes are NaN
     v.points.emplace_back(p.x * o.input_unit_mm, p.y * o.input_unit_mm, p.z * o.input_unit_mm);
-    if (v.width) {
-      v.pixel.push_back(static_cast<int>(i));
-      // An organized cloud is one view: every point was seen from the sensor's origin, which
-      // orients its normals (otherwise they face away from the centroid, wrong for a table seen
-      // from above).
+    if (v.width) v.pixel.push_back(static_cast<int>(i));
+    if (v.width && ext == ".pcd") {
+      // An organized PCD cloud is one view seen from its VIEWPOINT, which orients its normals
+      // (otherwise they face away from the centroid, wrong for a table seen from above). A PLY
+      // range grid (the Stanford scans) says nothing of where its scanner stood.
       const Eigen::Vector3d sensor = origin.head<3>().cast<double>() * o.input_unit_mm;
       const Eigen::Vector3d d = sensor - v.points.back();
       v.to_sensor.push_back(d.norm() > 0 ? Eigen::Vector3d(d.normalized()) : Eigen::Vector3d::Zero());

@@ -225,7 +225,7 @@ TEST(Reconstruct, ImlsMeshesAScanCloseToThePartWithoutInventingSurface) {
 
 TEST(Reconstruct, AnOrganizedCloudIsSeenFromItsViewpoint) {
   // A 4×3 organized PCD (one NaN) with the sensor at (0, 0, -100) mm: each point's direction to
-  // the sensor orients its normal; an unorganized PLY has no sensor (empty).
+  // the sensor orients its normal; a PLY cloud, organized or not, has no sensor (empty).
   const auto dir = test::scratch_dir();
   std::string pcd = "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 4\nHEIGHT 3\n"
                     "VIEWPOINT 0 0 -100 1 0 0 0\nPOINTS 12\nDATA ascii\n";
