@@ -43,7 +43,8 @@ int main(int argc, char** argv) {
   app.add_option("--voxel", o.voxel_mm, "Fusion voxel size, mm (default: measured point spacing; imls: 1.5 × spacing, also its grid)");
   app.add_option("--depth", o.poisson_depth, "Poisson octree depth (default: from spacing and size)");
   app.add_option("--trim", o.trim_mm, "Drop surface farther than this from the data, mm (default: 3 × spacing)");
-  app.add_option("--support", o.imls_support_mm, "imls: support radius of a point, mm (default: 2.5 × voxel)");
+  app.add_option("--support", o.imls_support_mm, "imls: support radius of a point, mm (default: 2.5 × voxel; 10 × the measured noise when that "
+                 "exceeds 0.45 voxel, as on RGB-D frames)");
   app.add_option("--simplify", o.simplify_mm,
                  "imls: decimate the mesh, moving the surface by at most this, mm (default: voxel / 10; 0 = off, "
                  "the fastest)")->type_name("MM");
@@ -102,7 +103,7 @@ int main(int argc, char** argv) {
                            {"normal_neighbours", o.normal_neighbours}, {"outlier_sigma", o.outlier_sigma}, {"mls_radius_mm", r.mls_radius_mm},
                            {"imls_support_mm", r.imls_support_mm}, {"simplify_mm", r.simplify_mm}};
     report.counts() = {{"frames", r.frames}, {"points_in", r.points_in}, {"points_fused", r.points_fused},
-                       {"outliers_removed", r.outliers_removed}, {"spacing_mm", r.spacing_mm},
+                       {"outliers_removed", r.outliers_removed}, {"spacing_mm", r.spacing_mm}, {"imls_noise_mm", r.imls_noise_mm},
                        {"faces_before_trim", r.faces_before_trim}, {"faces", r.faces}, {"vertices", r.vertices}};
     report.write(common.report);
     spdlog::info("{} points ({} fused, spacing {:.3f} mm) → {} faces → {}", r.points_in, r.points_fused, r.spacing_mm,

@@ -18,8 +18,9 @@ using namespace s2c;
 namespace {
 
 // A small simulated scan of a fixture part (fast: 320×240, 8 views).
-fs::path small_scan(const fs::path& dir, const char* part) {
+fs::path small_scan(const fs::path& dir, const char* part, double noise_mm = 0.05) {
   SimulateOptions o;
+  o.noise_mm = noise_mm;
   o.views = 8;
   o.width = 320;
   o.height = 240;
@@ -249,4 +250,29 @@ TEST(Reconstruct, AnOrganizedCloudIsSeenFromItsViewpoint) {
                                              return s;
                                            }());
   EXPECT_TRUE(load_views({dir / "loose.ply"}, {})[0].to_sensor.empty());
+}
+
+TEST(Reconstruct, ImlsWidensItsSupportOnANoisyScan) {
+  // σ = 0.4 mm at about 0.3 mm spacing: the noise of an RGB-D frame relative to its sampling. At
+  // 2.5 voxels the band breaks up into bubbles; the support follows the measured noise instead.
+  const auto dir = test::scratch_dir();
+  const auto scan = small_scan(dir, "plate", 0.4);
+  ReconstructOptions o;
+  o.method = MeshMethod::imls;
+  o.simplify_mm = 0;
+  ReconstructReport adaptive;
+  const CheckResult wide = check_mesh(mesh_to_soup(reconstruct({scan}, o, adaptive).mesh));
+  EXPECT_GT(adaptive.imls_noise_mm, 0.45 * adaptive.voxel_mm);
+  EXPECT_NEAR(adaptive.imls_support_mm, std::min(10 * adaptive.imls_noise_mm, 7.5 * adaptive.voxel_mm), 1e-9);
+  o.imls_support_mm = 2.5 * adaptive.voxel_mm;
+  ReconstructReport fixed;
+  const CheckResult narrow = check_mesh(mesh_to_soup(reconstruct({scan}, o, fixed).mesh));
+  EXPECT_LT(wide.components * 4, narrow.components) << "adaptive " << wide.components << ", 2.5 voxels " << narrow.components;
+  EXPECT_LT(wide.boundary_loops * 4, narrow.boundary_loops) << "adaptive " << wide.boundary_loops << ", 2.5 voxels " << narrow.boundary_loops;
+  // The clean scan keeps 2.5 voxels.
+  ReconstructReport clean;
+  o.imls_support_mm = 0;
+  reconstruct({small_scan(dir / "clean", "plate")}, o, clean);
+  EXPECT_LT(clean.imls_noise_mm, 0.45 * clean.voxel_mm);
+  EXPECT_NEAR(clean.imls_support_mm, 2.5 * clean.voxel_mm, 1e-12);
 }
