@@ -48,10 +48,6 @@ std::vector<Eigen::Vector3i> blocks_near_surface(const TriangleSoup& soup, doubl
   });
   std::vector<Eigen::Vector3i> all;
   for (auto& v : found) all.insert(all.end(), v.begin(), v.end());
-  std::sort(all.begin(), all.end(), [](const Eigen::Vector3i& p, const Eigen::Vector3i& q) {
-    return SparseGrid::key(p) < SparseGrid::key(q);
-  });
-  all.erase(std::unique(all.begin(), all.end()), all.end());
   return all;
 }
 

@@ -65,26 +65,17 @@ BinnedPoints bin_points(const std::vector<Eigen::Vector3d>& points, const Eigen:
   return b;
 }
 
-Eigen::Vector3i block_from_key(std::uint64_t k) {
-  auto c = [&](int shift) { return static_cast<int>((k >> shift) & 0x1fffff) - (1 << 20); };
-  return {c(0), c(21), c(42)};
-}
-
 /// Every block with a vertex within `radius` of a point: the point blocks and their neighbours
-/// (the radius is below one block side).
+/// (the radius is below one block side), with repeats (SparseGrid::allocate drops them).
 std::vector<Eigen::Vector3i> blocks_near_points(const BinnedPoints& bins) {
   std::vector<Eigen::Vector3i> all;
   all.reserve(bins.keys.size() * 8);
   for (const std::uint64_t k : bins.keys) {
-    const Eigen::Vector3i b = block_from_key(k);
+    const Eigen::Vector3i b = SparseGrid::block_from_key(k);
     for (int z = -1; z <= 1; ++z)
       for (int y = -1; y <= 1; ++y)
         for (int x = -1; x <= 1; ++x) all.push_back(b + Eigen::Vector3i(x, y, z));
   }
-  std::sort(all.begin(), all.end(), [](const Eigen::Vector3i& p, const Eigen::Vector3i& q) {
-    return SparseGrid::key(p) < SparseGrid::key(q);
-  });
-  all.erase(std::unique(all.begin(), all.end()), all.end());
   return all;
 }
 

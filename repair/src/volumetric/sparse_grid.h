@@ -3,6 +3,7 @@
 // area, not with the bounding box. A vertex stores the vector to its closest surface point as
 // three 16-bit integers scaled to the band radius (the vector is never longer than the band, so
 // the quantum is radius/32767, about 1e-4 voxel) and two flag bits: 7 bytes per vertex.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -51,6 +52,11 @@ class SparseGrid {
     auto u = [](int x) { return std::uint64_t(x + (1 << 20)) & 0x1fffff; };
     return u(block.x()) | (u(block.y()) << 21) | (u(block.z()) << 42);
   }
+  /// The block coordinates of a key (the inverse of key()).
+  static Eigen::Vector3i block_from_key(std::uint64_t k) {
+    auto c = [&](int shift) { return static_cast<int>((k >> shift) & 0x1fffff) - (1 << 20); };
+    return {c(0), c(21), c(42)};
+  }
   static Eigen::Vector3i block_of(const Eigen::Vector3i& ijk) {
     return {ijk.x() >> kBits, ijk.y() >> kBits, ijk.z() >> kBits};
   }
@@ -60,9 +66,13 @@ class SparseGrid {
   }
   static Eigen::Vector3i local_coords(int i) { return {i & (kSide - 1), (i >> kBits) & (kSide - 1), i >> (2 * kBits)}; }
 
-  /// Creates the blocks (empty vertices) for the given keys; call before filling, not concurrently.
-  /// Blocks keep the order of `block_coords` (sorted by key, that is by z, then y, then x).
-  void allocate(const std::vector<Eigen::Vector3i>& block_coords) {
+  /// Creates the blocks (empty vertices) at the given block coordinates, repeats allowed; call
+  /// before filling, not concurrently. Blocks are ordered by key, that is by z, then y, then x
+  /// (Marching Cubes sweeps them in that order).
+  void allocate(std::vector<Eigen::Vector3i> block_coords) {
+    std::sort(block_coords.begin(), block_coords.end(),
+              [](const Eigen::Vector3i& p, const Eigen::Vector3i& q) { return key(p) < key(q); });
+    block_coords.erase(std::unique(block_coords.begin(), block_coords.end()), block_coords.end());
     blocks_.reserve(block_coords.size());
     for (const auto& b : block_coords) {
       const auto [it, inserted] = map_.emplace(key(b), static_cast<std::int64_t>(blocks_.size()));
