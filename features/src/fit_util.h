@@ -35,6 +35,10 @@ struct Normalized {
   int size() const { return static_cast<int>(p.size()); }
 };
 
+/// Indices of a deterministic stratified subsample of 0..n-1: all of them when n ≤ max, else one
+/// per stratum of n/max at a pseudo-random offset, ascending.
+std::vector<std::size_t> stratified_pick(std::size_t n, std::size_t max);
+
 /// Checks `s` and builds its normalised subsample. False when the samples cannot determine a shape
 /// with `min_count` parameters: NaN/inf anywhere, negative weights, fewer than `min_count`
 /// samples of positive weight, or all points (numerically) equal.

@@ -37,6 +37,11 @@ constexpr std::size_t kSeedFaces = 100;
 constexpr std::size_t kWarmFaces = 1000;
 /// A refused merge is tried again once one of the two regions has grown by this share.
 constexpr double kRetryGrowth = 0.02;
+/// A merge trial decides whether another type beats the pair's own on this many of the union's
+/// samples; only a union that passes is fitted and measured on all of them.
+constexpr std::size_t kMergeScreenSamples = 2000;
+/// A merge partner this small against the region (faces) is a crumb: see absorbs() in segment().
+constexpr double kCrumbShare = 0.01;
 
 void log_regions(const char* stage, const std::vector<Region>& regions) {
   if (!spdlog::should_log(spdlog::level::debug)) return;
@@ -132,6 +137,19 @@ void accumulate(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals
   for (int v : raw.vertex) slot[v] = -1;
 }
 
+/// A stratified subsample of at most `max` samples: enough to tell which type fits a merged pair
+/// best, at a fraction of the cost of every type's metrics over all of a large union.
+Samples thinned(const Samples& s, std::size_t max) {
+  if (s.points.size() <= max) return s;
+  Samples out;
+  for (std::size_t i : fit::stratified_pick(s.points.size(), max)) {
+    out.points.push_back(s.points[i]);
+    out.normals.push_back(s.normals[i]);
+    out.weights.push_back(s.weights[i]);
+  }
+  return out;
+}
+
 /// The samples: normals made unit.
 Samples finished(RawSamples raw) {
   Samples s = std::move(raw.s);
@@ -207,6 +225,26 @@ Fit fit_of_type(ShapeType type, const Samples& s) {
 bool may_choose(ShapeType type, const Samples& s, const SegmentParams& p, Fit& fit) {
   fit = fit_of_type(type, s);
   return type == ShapeType::plane ? acceptable(fit, p) : usable(fit, p);
+}
+
+/// may_choose for the type of `start`, refined from it first (a merge's union from the first
+/// region's shape: one refinement instead of the robust starts' several), from the robust
+/// starts when that refinement is not good enough.
+bool may_refit(const Shape& start, const Samples& s, const SegmentParams& p, Fit& fit) {
+  if (start.type != ShapeType::plane) {  // a plane's fit is direct: nothing to start from
+    fit = refit_surface(s, start);
+    if (usable(fit, p)) return true;
+  }
+  return may_choose(start.type, s, p, fit);
+}
+
+/// Does `shape` explain face f: its vertices within 1.5 tolerances, its normal within the normal
+/// tolerance at its centroid?
+bool explains(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, const Shape& shape, int f,
+              const SegmentParams& p) {
+  for (int v : m.tri[f])
+    if (distance(shape, m.pos[v]) > 1.5 * p.tolerance) return false;
+  return std::abs(surface_normal(shape, m.centroid[f]).dot(normals[f])) >= std::cos(p.normal_tol_deg * M_PI / 180.0);
 }
 
 /// Fits of one sample set by type: plane, sphere, cylinder, cone (ok false: none).
@@ -299,12 +337,7 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
   auto remaining = [&](int f) { return (state[f] & kRemaining) != 0; };
   std::vector<int> stamp(m.faces(), 0);  // faces visited by the current search: stamp == epoch
   int epoch = 0;
-  const double cos_tol = std::cos(p.normal_tol_deg * M_PI / 180.0);
-  auto fits = [&](const Shape& shape, int f) {
-    for (int v : m.tri[f])
-      if (distance(shape, m.pos[v]) > 1.5 * p.tolerance) return false;
-    return std::abs(surface_normal(shape, m.centroid[f]).dot(normals[f])) >= cos_tol;
-  };
+  auto fits = [&](const Shape& shape, int f) { return explains(m, normals, shape, f, p); };
   auto neighbours = [&](int f, auto&& visit) {
     for (int e : m.face_edges[f]) {
       if (e < 0) continue;
@@ -588,7 +621,26 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
     bool mixed;
     bool ok = false;
     Fit fit;
-    std::optional<RawSamples> united;
+    std::optional<RawSamples> united;  ///< the union's samples; none when B is a crumb A absorbs
+  };
+  // A crumb (a few faces beside a large region, kCrumbShare of its size at most) joins the region
+  // with the region's shape as it is when the union is within tolerance of that shape: refitting
+  // would move the shape by a crumb's worth (and only closer to the union), and a region of a
+  // hundred thousand faces took tens of crumbs, one per pass, each with a fit of all its samples.
+  // The union's metrics combine the region's and the crumb's by area (the rim vertices they
+  // share counted on both sides).
+  auto absorbs = [&](const Region& A, const Region& B, Fit& united) {
+    if (!(static_cast<double>(B.faces.size()) <= kCrumbShare * static_cast<double>(A.faces.size()))) return false;
+    Fit crumb = A.fit;
+    fit::finish(crumb, region_samples(m, normals, B.faces));
+    const double wa = A.area, wb = B.area;
+    if (!crumb.ok || !(wa + wb > 0)) return false;
+    auto mean_square = [&](double a, double b) { return std::sqrt((wa * a * a + wb * b * b) / (wa + wb)); };
+    united = A.fit;
+    united.rms = mean_square(A.fit.rms, crumb.rms);
+    united.normal_rms_deg = mean_square(A.fit.normal_rms_deg, crumb.normal_rms_deg);
+    united.max_error = std::max(A.fit.max_error, crumb.max_error);
+    return acceptable(united, p);
   };
   auto curved = [](ShapeType t) { return t == ShapeType::sphere || t == ShapeType::cylinder || t == ShapeType::cone; };
   // The neighbouring pairs, from the edges once: regions only unite, so after a pass the pairs
@@ -622,12 +674,31 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
     }
     auto evaluate = [&](Trial& t) {
       const ShapeType ta = seg.regions[t.a].fit.shape.type, tb = seg.regions[t.b].fit.shape.type;
+      if (!t.mixed && absorbs(seg.regions[t.a], seg.regions[t.b], t.fit)) {
+        t.ok = true;
+        return;
+      }
       RawSamples united = *raw[t.a];
       accumulate(m, normals, seg.regions[t.b].faces, united);
       const Samples samples = finished(united);
       Fit own;
-      const bool may = may_choose(ta, samples, p, own) || (t.mixed && may_choose(tb, samples, p, own));
-      if (may) t.fit = choose_shape_with(samples, p, &own);
+      bool may;
+      if (t.mixed) {
+        may = may_choose(ta, samples, p, own) || may_choose(tb, samples, p, own);
+        if (may) t.fit = choose_shape_with(samples, p, &own);
+      } else {
+        // Screened on a subsample, the union refined from the first region's shape: a large
+        // region absorbing its crumbs one by one fitted every type to all its samples each time.
+        const Samples screen = thinned(samples, kMergeScreenSamples);
+        const Shape& from = seg.regions[t.a].fit.shape;
+        Fit own_screen;
+        may = may_refit(from, screen, p, own_screen);
+        if (may) t.fit = choose_shape_with(screen, p, &own_screen);
+        if (may && t.fit.shape.type == ta) {
+          may = may_refit(from, samples, p, own);
+          t.fit = own;
+        }
+      }
       t.ok = may && (t.fit.shape.type == ta || (t.mixed && t.fit.shape.type == tb));
       if (t.ok) t.united = std::move(united);
     };
@@ -668,8 +739,11 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
           refused[{A.faces.front(), B.faces.front()}] = {A.faces.size(), B.faces.size()};
           continue;
         }
+        if (t.united)
+          raw[t.a] = std::move(t.united);
+        else if (raw[t.a])
+          accumulate(m, normals, B.faces, *raw[t.a]);
         A.faces.insert(A.faces.end(), B.faces.begin(), B.faces.end());
-        raw[t.a] = std::move(t.united);
         A.fit = t.fit;
         A.area += B.area;
         for (int g : B.faces) seg.face_region[g] = t.a;

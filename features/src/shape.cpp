@@ -115,6 +115,22 @@ double jitter(std::uint64_t k) {
 
 }  // namespace
 
+std::vector<std::size_t> stratified_pick(std::size_t n, std::size_t max) {
+  // One sample per stratum at a pseudo-random offset, so a stride cannot alias with a regular
+  // layout (every 96th vertex of 96-vertex rings would be one straight line).
+  std::vector<std::size_t> pick;
+  if (n <= max) {
+    pick.resize(n);
+    for (std::size_t i = 0; i < n; ++i) pick[i] = i;
+    return pick;
+  }
+  pick.resize(max);
+  const double stratum = static_cast<double>(n) / static_cast<double>(max);
+  for (std::size_t k = 0; k < max; ++k)
+    pick[k] = std::min(n - 1, static_cast<std::size_t>((static_cast<double>(k) + jitter(k)) * stratum));
+  return pick;
+}
+
 bool normalize(const Samples& s, int min_count, Normalized& out, int max_samples) {
   const std::size_t n = s.points.size();
   if (!s.normals.empty() && s.normals.size() != n)
@@ -144,18 +160,7 @@ bool normalize(const Samples& s, int min_count, Normalized& out, int max_samples
   const double scale = std::sqrt(var / wsum);
   if (!(scale > 1e-12 * std::max(1.0, c.norm())) || !std::isfinite(scale)) return false;  // all points equal
 
-  // Stratified subsample: one sample per stratum at a pseudo-random offset, so a stride cannot
-  // alias with a regular layout (every 96th vertex of 96-vertex rings would be one straight line).
-  std::vector<std::size_t> pick;
-  if (n <= static_cast<std::size_t>(max_samples)) {
-    pick.resize(n);
-    for (std::size_t i = 0; i < n; ++i) pick[i] = i;
-  } else {
-    pick.resize(max_samples);
-    const double stratum = static_cast<double>(n) / max_samples;
-    for (int k = 0; k < max_samples; ++k)
-      pick[k] = std::min(n - 1, static_cast<std::size_t>((k + jitter(k)) * stratum));
-  }
+  const std::vector<std::size_t> pick = stratified_pick(n, static_cast<std::size_t>(max_samples));
   out = Normalized{};
   out.center = c;
   out.scale = scale;
