@@ -10,6 +10,7 @@ pkgs=(
   build-essential cmake ninja-build ccache pkg-config git
   libeigen3-dev libpcl-dev libopenmesh-dev libembree-dev libopencv-dev
   libspdlog-dev libfmt-dev nlohmann-json3-dev libcli11-dev libtbb-dev libgmp-dev
+  libpng-dev libtiff-dev  # depth frames (core/src/depth_image.cpp)
   libgtest-dev libgmock-dev
   # reconstruct's point search (exact k-nearest / radius; PCL's FLANN syscalls per query)
   libnanoflann-dev

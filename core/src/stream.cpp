@@ -11,10 +11,10 @@
 
 #include <fmt/format.h>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "s2c/core/errors.h"
 #include "s2c/core/files.h"
+#include "depth_image.h"
 
 namespace fs = std::filesystem;
 
@@ -22,7 +22,6 @@ namespace s2c {
 namespace {
 
 constexpr const char* kFormat = "scan2cad.stream/1";
-constexpr int kPngCompression = 1;
 
 [[noreturn]] void bad(const fs::path& file, const std::string& what) {
   throw InvalidInput(fmt::format("{}: {}", file.string(), what));
@@ -271,42 +270,6 @@ std::optional<Eigen::Isometry3d> Stream::pose_of(std::size_t frame) const {
   return best->camera_to_world;
 }
 
-/// A PNG's size from its IHDR, read before decoding: a header claiming 100000 × 100000 pixels is
-/// refused instead of allocated. Non-PNG files (TIFF frames) return nothing.
-static std::optional<std::pair<std::uint32_t, std::uint32_t>> png_size(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  unsigned char h[24] = {};
-  if (!in.read(reinterpret_cast<char*>(h), sizeof h)) return std::nullopt;
-  static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  if (std::memcmp(h, sig, 8) != 0 || std::memcmp(h + 12, "IHDR", 4) != 0) return std::nullopt;
-  auto be32 = [&](int o) { return std::uint32_t(h[o]) << 24 | std::uint32_t(h[o + 1]) << 16 | std::uint32_t(h[o + 2]) << 8 | h[o + 3]; };
-  return std::make_pair(be32(16), be32(20));
-}
-
-DepthImage read_depth_png(const fs::path& path) {
-  if (!fs::exists(path)) throw InvalidInput(fmt::format("{}: frame file does not exist", path.string()));
-  if (const auto size = png_size(path); size && (size->first > 16384 || size->second > 16384))
-    throw InvalidInput(fmt::format("{}: PNG header claims {}x{} pixels (at most 16384x16384)", path.string(),
-                                   size->first, size->second));
-  cv::Mat img;
-  try {
-    img = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
-  } catch (const std::exception& e) {
-    throw InvalidInput(fmt::format("{}: unreadable frame: {}", path.string(), e.what()));
-  }
-  if (img.empty()) throw InvalidInput(fmt::format("{}: unreadable or truncated image", path.string()));
-  if (img.type() != CV_16UC1)
-    throw InvalidInput(fmt::format("{}: frame must be a 16-bit single-channel PNG (found {} channels, depth {})",
-                                   path.string(), img.channels(), img.depth()));
-  DepthImage d;
-  d.width = img.cols;
-  d.height = img.rows;
-  d.data.resize(static_cast<std::size_t>(img.rows) * img.cols);
-  for (int r = 0; r < img.rows; ++r)
-    std::memcpy(&d.data[static_cast<std::size_t>(r) * img.cols], img.ptr<std::uint16_t>(r), img.cols * 2);
-  return d;
-}
-
 /// \throw InvalidInput when frame `i` is not the size stream.yaml gives.
 static void expect_frame_size(const Stream& s, std::size_t i, std::uint64_t w, std::uint64_t h) {
   if (w != static_cast<std::uint64_t>(s.info.width) || h != static_cast<std::uint64_t>(s.info.height))
@@ -320,16 +283,6 @@ DepthImage read_frame(const Stream& s, std::size_t i) {
   DepthImage d = read_depth_png(path);
   expect_frame_size(s, i, d.width, d.height);  // formats without a readable header (TIFF)
   return d;
-}
-
-std::string encode_depth_png(const DepthImage& d) {
-  cv::Mat img(d.height, d.width, CV_16UC1, const_cast<std::uint16_t*>(d.data.data()));
-  std::vector<std::uint8_t> bytes;
-  // Level 1: depth images compress nearly as well as at 9 (runs of zeros, smooth surfaces),
-  // several times faster, which a recorder at 30 fps needs.
-  if (!cv::imencode(".png", img, bytes, {cv::IMWRITE_PNG_COMPRESSION, kPngCompression}))
-    throw IoError("cannot encode a depth frame as PNG");
-  return std::string(bytes.begin(), bytes.end());
 }
 
 std::string index_line(const StreamFrame& f) { return fmt::format("{:.6f} {}\n", f.timestamp, f.file); }
@@ -351,10 +304,6 @@ std::string pose_line(const StreamPose& p, double pose_unit_mm) {
   for (int i = 0; i < 3; ++i) t[i] = std::abs(t[i]) < 5e-10 ? 0.0 : t[i];
   return fmt::format("{:.6f} {:.9f} {:.9f} {:.9f} {:.12f} {:.12f} {:.12f} {:.12f}\n", p.timestamp, t.x(), t.y(), t.z(),
                      q.x(), q.y(), q.z(), q.w());
-}
-
-void write_depth_png(const fs::path& path, const DepthImage& d) {
-  write_file_atomic(path, encode_depth_png(d));
 }
 
 void write_stream_yaml(const fs::path& file, const StreamInfo& info) {
