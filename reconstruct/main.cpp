@@ -81,7 +81,7 @@ int main(int argc, char** argv) {
     s2c::Report report("scan2cad-reconstruct");
     s2c::ReconstructReport r;
     if (app.count("--mls")) o.mls_radius_mm = mls > 0 ? mls : -1;  // -1: from the spacing
-    const s2c::Reconstruction result = s2c::reconstruct(in, o, r);
+    s2c::Reconstruction result = s2c::reconstruct(in, o, r);
     report.add_time("load", r.load_s);
     report.add_time("register", r.register_s);
     report.add_time("fuse", r.fuse_s);
@@ -89,7 +89,7 @@ int main(int argc, char** argv) {
     {
       s2c::Report::Step t(report, "write");
       if (!cloud_out.empty()) s2c::write_cloud(result.cloud, cloud_out);
-      s2c::write_mesh(result.mesh, output);
+      s2c::write_mesh(std::move(result.mesh), output);
     }
     nlohmann::json views = nlohmann::json::array();
     for (const auto& v : r.views)

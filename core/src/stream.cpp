@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -354,12 +355,16 @@ Deprojector::Deprojector(const StreamInfo& info) : info_(info) {
 
 std::vector<Eigen::Vector3d> Deprojector::sensor_points(const DepthImage& depth, std::vector<Eigen::Vector3d>* to_sensor,
                                                         std::vector<int>* pixels) const {
-  std::vector<Eigen::Vector3d> pts;
-  pts.reserve(depth.data.size() / 4);
-  if (to_sensor) to_sensor->clear();
-  if (pixels) pixels->clear();
-  const bool laser = info_.sensor == Sensor::laser;
   const std::size_t n = std::min(depth.data.size(), rays_.size());
+  // Reserved exactly: grown by doubling, a frame's three arrays held up to twice their size, and
+  // every frame of a scan is held until the fusion.
+  const auto valid = static_cast<std::size_t>(
+      std::count_if(depth.data.begin(), depth.data.begin() + static_cast<std::ptrdiff_t>(n), [](std::uint16_t d) { return d != 0; }));
+  std::vector<Eigen::Vector3d> pts;
+  pts.reserve(valid);
+  if (to_sensor) to_sensor->clear(), to_sensor->reserve(valid);
+  if (pixels) pixels->clear(), pixels->reserve(valid);
+  const bool laser = info_.sensor == Sensor::laser;
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint16_t raw = depth.data[i];
     if (!raw) continue;

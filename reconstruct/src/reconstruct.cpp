@@ -174,9 +174,9 @@ Mesh mesh_cloud_imls(const OrientedCloud& in, const ReconstructOptions& o, Recon
 
 OrientedCloud fuse_input(const std::vector<fs::path>& inputs, const ReconstructOptions& o, ReconstructReport& rep) {
   std::vector<Eigen::Isometry3d> poses;
-  const std::vector<View> views = load_and_register(inputs, o, rep, poses);
+  std::vector<View> views = load_and_register(inputs, o, rep, poses);
   auto t = std::chrono::steady_clock::now();
-  OrientedCloud cloud = fuse_views(views, poses, o, rep);
+  OrientedCloud cloud = fuse_views(std::move(views), poses, o, rep);
   rep.fuse_s = lap(t);
   return cloud;
 }
@@ -185,16 +185,18 @@ Reconstruction reconstruct(const std::vector<fs::path>& inputs, const Reconstruc
   std::vector<Eigen::Isometry3d> poses;
   std::vector<View> views = load_and_register(inputs, o, rep, poses);
   auto t = std::chrono::steady_clock::now();
-  Reconstruction r;
-  r.cloud = fuse_views(views, poses, o, rep);
+  // The frames (a third of the memory before meshing) are not needed by the cloud mesher: the
+  // fusion releases them as it goes.
+  const bool organized = o.method == MeshMethod::organized;
+  OrientedCloud cloud = organized ? fuse_views(views, poses, o, rep) : fuse_views(std::move(views), poses, o, rep);
   rep.fuse_s = lap(t);
-  // The frames (a third of the memory before meshing) are not needed by the cloud mesher.
-  if (o.method != MeshMethod::organized) std::vector<View>().swap(views);
   // Hand what the frames and the registration held back to the system before the mesher's peak:
   // frames decoded side by side were allocated in the worker threads' malloc arenas, which keep
   // freed memory (20 MB more peak on the bracket scan otherwise).
   malloc_trim(0);
-  r.mesh = o.method == MeshMethod::organized ? mesh_views_organized(views, poses, o, rep) : mesh_cloud(r.cloud, o, rep);
+  // The mesh is made in place (an OpenMesh mesh has no move assignment: assigned, it is copied).
+  Reconstruction r{{}, organized ? mesh_views_organized(views, poses, o, rep) : mesh_cloud(cloud, o, rep)};
+  r.cloud = std::move(cloud);
   rep.mesh_s = lap(t);
   spdlog::debug("load {:.2f} s, register {:.2f} s, fuse {:.2f} s, mesh {:.2f} s", rep.load_s, rep.register_s,
                 rep.fuse_s, rep.mesh_s);
@@ -248,8 +250,13 @@ Mesh mesh_views_organized(const std::vector<View>& views, const std::vector<Eige
   return mesh;
 }
 
-OrientedCloud fuse_views(const std::vector<View>& views, const std::vector<Eigen::Isometry3d>& poses,
-                         const ReconstructOptions& o, ReconstructReport& rep) {
+namespace {
+
+/// The registered views' points in one cloud, the direction to the sensor in the normal fields.
+/// With `consumed` (the views themselves), each view's arrays are released once copied: the
+/// frames and their copy were both held at the stage's peak.
+Cloud::Ptr gather_views(const std::vector<View>& views, std::vector<View>* consumed,
+                        const std::vector<Eigen::Isometry3d>& poses, const ReconstructReport& rep) {
   auto raw = std::make_shared<Cloud>();
   // Reserved: grown by doubling, the copy of 0.6 M points was the plate's heap peak (50 of 135 MB).
   std::size_t total = 0;
@@ -265,7 +272,14 @@ OrientedCloud fuse_views(const std::vector<View>& views, const std::vector<Eigen
       const Eigen::Vector3d d = v.to_sensor.empty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(T.linear() * v.to_sensor[k]);
       raw->push_back(point_normal(p, d));
     }
+    if (consumed) (*consumed)[i] = View{};
   }
+  return raw;
+}
+
+OrientedCloud fuse(const std::vector<View>& views, std::vector<View>* consumed,
+                   const std::vector<Eigen::Isometry3d>& poses, const ReconstructOptions& o, ReconstructReport& rep) {
+  Cloud::Ptr raw = gather_views(views, consumed, poses, rep);
   rep.points_in = raw->size();
   if (raw->size() < 10) throw InvalidInput(fmt::format("only {} valid points; nothing to reconstruct", raw->size()));
   if (rep.spacing_mm <= 0) rep.spacing_mm = measure_spacing(raw);
@@ -274,6 +288,7 @@ OrientedCloud fuse_views(const std::vector<View>& views, const std::vector<Eigen
   rep.voxel_mm = o.voxel_mm > 0 ? o.voxel_mm : (o.method == MeshMethod::imls ? 1.5 : 1.0) * rep.spacing_mm;
 
   Cloud::Ptr fused = std::make_shared<Cloud>(voxel_downsample(*raw, rep.voxel_mm));
+  raw.reset();  // the fused cloud is a fraction of it
   if (o.outlier_sigma > 0 && fused->size() > 50) {
     Cloud::Ptr kept = std::make_shared<Cloud>(remove_statistical_outliers(*fused, 16, o.outlier_sigma));
     rep.outliers_removed = fused->size() - kept->size();
@@ -318,6 +333,8 @@ OrientedCloud fuse_views(const std::vector<View>& views, const std::vector<Eigen
   for (const auto& p : *fused) centroid += Eigen::Vector3d(p.x, p.y, p.z);
   centroid /= static_cast<double>(fused->size());
   OrientedCloud out;
+  out.points.reserve(fused->size());
+  out.normals.reserve(fused->size());
   for (std::size_t i = 0; i < fused->size(); ++i) {
     const auto& p = (*fused)[i];
     Eigen::Vector3d n(normals[i].normal_x, normals[i].normal_y, normals[i].normal_z);
@@ -329,6 +346,20 @@ OrientedCloud fuse_views(const std::vector<View>& views, const std::vector<Eigen
     out.points.push_back(pos);
     out.normals.push_back(n.normalized());
   }
+  return out;
+}
+
+}  // namespace
+
+OrientedCloud fuse_views(const std::vector<View>& views, const std::vector<Eigen::Isometry3d>& poses,
+                         const ReconstructOptions& o, ReconstructReport& rep) {
+  return fuse(views, nullptr, poses, o, rep);
+}
+
+OrientedCloud fuse_views(std::vector<View>&& views, const std::vector<Eigen::Isometry3d>& poses,
+                         const ReconstructOptions& o, ReconstructReport& rep) {
+  OrientedCloud out = fuse(views, &views, poses, o, rep);
+  std::vector<View>().swap(views);
   return out;
 }
 

@@ -88,34 +88,53 @@ Mesh read_mesh(const fs::path& path) {
   return mesh;
 }
 
-void write_mesh(const Mesh& mesh_in, const fs::path& path, const WriteOptions& options) {
-  silence_openmesh();
-  const MeshFormat format = mesh_format(path);
-  if (format == MeshFormat::vtk) throw InvalidInput(fmt::format("{}: writing .vtk is not supported", path.string()));
+namespace {
+
+/// Writes `mesh` as it is; `normals` says whether its vertex normals are to be written (they are
+/// current then).
+void write_as_is(const Mesh& mesh, const fs::path& path, const WriteOptions& options, bool normals) {
   OpenMesh::IO::Options opt;
-  if (options.binary && (format == MeshFormat::ply || format == MeshFormat::stl)) {
+  if (options.binary && (mesh_format(path) == MeshFormat::ply || mesh_format(path) == MeshFormat::stl)) {
     opt += OpenMesh::IO::Options::Binary;
     opt += OpenMesh::IO::Options::LSB;
   }
-  const Mesh* mesh = &mesh_in;
-  Mesh with_normals;
-  if (options.vertex_normals && format != MeshFormat::stl) {
-    opt += OpenMesh::IO::Options::VertexNormal;
-    with_normals = mesh_in;
-    with_normals.update_normals();
-    mesh = &with_normals;
-  }
+  if (normals) opt += OpenMesh::IO::Options::VertexNormal;
   AtomicFile out(path);
-  if (!OpenMesh::IO::write_mesh(*mesh, out.temp_path().string(), opt))
+  if (!OpenMesh::IO::write_mesh(mesh, out.temp_path().string(), opt))
     throw IoError(fmt::format("{}: writing failed (disk full or not writable?)", path.string()));
   out.commit();
+}
+
+/// Whether `path` gets vertex normals under `options`. \throw InvalidInput for unwritable formats.
+bool wants_normals(const fs::path& path, const WriteOptions& options) {
+  silence_openmesh();
+  const MeshFormat format = mesh_format(path);
+  if (format == MeshFormat::vtk) throw InvalidInput(fmt::format("{}: writing .vtk is not supported", path.string()));
+  return options.vertex_normals && format != MeshFormat::stl;
+}
+
+}  // namespace
+
+void write_mesh(const Mesh& mesh, const fs::path& path, const WriteOptions& options) {
+  if (!wants_normals(path, options)) return write_as_is(mesh, path, options, false);
+  Mesh with_normals = mesh;
+  with_normals.update_normals();
+  write_as_is(with_normals, path, options, true);
+}
+
+void write_mesh(Mesh&& mesh, const fs::path& path, const WriteOptions& options) {
+  const bool normals = wants_normals(path, options);
+  if (normals) mesh.update_normals();
+  write_as_is(mesh, path, options, normals);
 }
 
 // ---------------------------------------------------------------------------------------------
 
 std::size_t soup_to_mesh(const TriangleSoup& soup, Mesh& mesh) {
   mesh.clear();
-  mesh.reserve(soup.vertices.size(), soup.faces.size() * 3 / 2, soup.faces.size());
+  // 3F/2 edges when closed, more with boundaries (an open scan surface); beyond its capacity the
+  // edge array would double (a reserve only costs address space until it is written).
+  mesh.reserve(soup.vertices.size(), soup.faces.size() * 7 / 4 + 64, soup.faces.size());
   std::vector<Mesh::VertexHandle> vh(soup.vertices.size());
   for (std::size_t i = 0; i < soup.vertices.size(); ++i) vh[i] = mesh.add_vertex(to_om(soup.vertices[i]));
   if (!soup.normals.empty())

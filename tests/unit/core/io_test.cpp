@@ -64,6 +64,18 @@ TEST(MeshIo, RoundTripEveryFormat) {
   }
 }
 
+TEST(MeshIo, WritingAMeshTheCallerIsDoneWithGivesTheSameBytes) {
+  const auto dir = scratch_dir();
+  Mesh m;
+  soup_to_mesh(test::cube(10), m);
+  for (const char* ext : {".ply", ".stl", ".obj", ".off"}) {
+    Mesh spent = m;
+    write_mesh(m, dir / (std::string("kept") + ext));
+    write_mesh(std::move(spent), dir / (std::string("spent") + ext));
+    EXPECT_EQ(read_file(dir / (std::string("kept") + ext)), read_file(dir / (std::string("spent") + ext))) << ext;
+  }
+}
+
 TEST(MeshIo, WriteIsAtomicAndLeavesNoTemporaryFile) {
   const auto dir = scratch_dir();
   Mesh m;

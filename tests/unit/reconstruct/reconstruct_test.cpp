@@ -109,6 +109,23 @@ TEST(Reconstruct, ViewsThatDoNotOverlapFailWithAMessage) {
   EXPECT_THROW(register_views({a, b}, 0.4, {}, report), ProcessingError);
 }
 
+TEST(Reconstruct, FusingConsumedViewsGivesTheSameCloudAndReleasesThem) {
+  const auto dir = test::scratch_dir();
+  ReconstructOptions o;
+  std::vector<View> views = load_views({small_scan(dir, "plate")}, o.input);
+  ASSERT_GT(views.size(), 1u);
+  const std::vector<Eigen::Isometry3d> poses(views.size(), Eigen::Isometry3d::Identity());
+  ReconstructReport kept_rep, consumed_rep;
+  kept_rep.spacing_mm = consumed_rep.spacing_mm = 0.5;
+  const OrientedCloud kept = fuse_views(views, poses, o, kept_rep);
+  ASSERT_FALSE(views.empty());
+  const OrientedCloud consumed = fuse_views(std::move(views), poses, o, consumed_rep);
+  EXPECT_TRUE(views.empty());  // NOLINT(bugprone-use-after-move): emptied on purpose
+  EXPECT_EQ(consumed.points, kept.points);
+  EXPECT_EQ(consumed.normals, kept.normals);
+  EXPECT_EQ(consumed_rep.points_in, kept_rep.points_in);
+}
+
 TEST(Reconstruct, MeshesAScanCloseToThePart) {
   const auto dir = test::scratch_dir();
   const auto part = read_soup(test::source_dir() / "fixtures/parts/plate.stl");

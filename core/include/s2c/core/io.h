@@ -42,5 +42,8 @@ struct WriteOptions {
 /// Writes atomically (temporary file + rename in the target folder): a failed or killed write
 /// leaves no partial file. \throw IoError on failure, InvalidInput for an unknown extension.
 void write_mesh(const Mesh& mesh, const std::filesystem::path& path, const WriteOptions& options = {});
+/// The same for a mesh the caller is done with: its vertex normals are computed in place rather
+/// than on a copy (a copy of a scan's mesh was the reconstruct stage's memory peak).
+void write_mesh(Mesh&& mesh, const std::filesystem::path& path, const WriteOptions& options = {});
 
 }  // namespace s2c

@@ -75,6 +75,10 @@ Mesh mesh_views_organized(const std::vector<View>& views, const std::vector<Eige
 /// statistical outlier removal, normals oriented towards the sensors.
 OrientedCloud fuse_views(const std::vector<View>& views, const std::vector<Eigen::Isometry3d>& poses,
                          const ReconstructOptions& options, ReconstructReport& report);
+/// The same, consuming the views: each is released as soon as its points are copied, and `views`
+/// is empty afterwards (a scan's frames need not be held beside their fused copy).
+OrientedCloud fuse_views(std::vector<View>&& views, const std::vector<Eigen::Isometry3d>& poses,
+                         const ReconstructOptions& options, ReconstructReport& report);
 
 /// Meshes a fused cloud; regions without data stay open (holes for repair).
 /// \throw ProcessingError when the mesher produces nothing.
