@@ -238,15 +238,6 @@ bool may_refit(const Shape& start, const Samples& s, const SegmentParams& p, Fit
   return may_choose(start.type, s, p, fit);
 }
 
-/// Does `shape` explain face f: its vertices within 1.5 tolerances, its normal within the normal
-/// tolerance at its centroid?
-bool explains(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, const Shape& shape, int f,
-              const SegmentParams& p) {
-  for (int v : m.tri[f])
-    if (distance(shape, m.pos[v]) > 1.5 * p.tolerance) return false;
-  return std::abs(surface_normal(shape, m.centroid[f]).dot(normals[f])) >= std::cos(p.normal_tol_deg * M_PI / 180.0);
-}
-
 /// Fits of one sample set by type: plane, sphere, cylinder, cone (ok false: none).
 using TypeFits = std::array<Fit, 4>;
 int type_slot(ShapeType t) {
@@ -337,7 +328,12 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
   auto remaining = [&](int f) { return (state[f] & kRemaining) != 0; };
   std::vector<int> stamp(m.faces(), 0);  // faces visited by the current search: stamp == epoch
   int epoch = 0;
-  auto fits = [&](const Shape& shape, int f) { return explains(m, normals, shape, f, p); };
+  const double cos_tol = std::cos(p.normal_tol_deg * M_PI / 180.0);
+  auto fits = [&](const Shape& shape, int f) {
+    for (int v : m.tri[f])
+      if (distance(shape, m.pos[v]) > 1.5 * p.tolerance) return false;
+    return std::abs(surface_normal(shape, m.centroid[f]).dot(normals[f])) >= cos_tol;
+  };
   auto neighbours = [&](int f, auto&& visit) {
     for (int e : m.face_edges[f]) {
       if (e < 0) continue;
