@@ -1,7 +1,9 @@
 // The analytic Jacobians of the surface models (fit_models.h) against central differences of
 // their own residuals: a wrong derivative would still let Levenberg–Marquardt creep downhill, so
 // only a direct comparison catches it.
+#include <algorithm>
 #include <random>
+#include <set>
 
 #include <gtest/gtest.h>
 
@@ -112,3 +114,20 @@ TEST(FitModels, LevenbergMarquardtUsesTheAnalyticJacobian) {
 
 }  // namespace
 }  // namespace s2c::features::fit
+
+TEST(FitUtil, StratifiedPickCoversTheRangeWithoutAliasing) {
+  EXPECT_EQ(s2c::features::fit::stratified_pick(5, 10), (std::vector<std::size_t>{0, 1, 2, 3, 4}));
+  // 1000 rings of 96 vertices: a plain stride of 96 would pick one vertex of every ring, all at
+  // the same angle (a cylinder seen as a straight line).
+  const std::size_t n = 96 * 1000, max = 1000;
+  const std::vector<std::size_t> pick = s2c::features::fit::stratified_pick(n, max);
+  ASSERT_EQ(pick.size(), max);
+  EXPECT_TRUE(std::is_sorted(pick.begin(), pick.end()));
+  EXPECT_EQ(std::adjacent_find(pick.begin(), pick.end()), pick.end()) << "no index twice";
+  EXPECT_LT(pick.front(), n / max);
+  EXPECT_GE(pick.back(), n - n / max);
+  std::set<std::size_t> angles;
+  for (std::size_t i : pick) angles.insert(i % 96);
+  EXPECT_GT(angles.size(), 48u);
+  EXPECT_EQ(s2c::features::fit::stratified_pick(n, max), pick) << "deterministic";
+}
