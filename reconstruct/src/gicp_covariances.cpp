@@ -18,8 +18,13 @@ constexpr double kGicpEpsilon = 0.001;
 
 Gicp::MatricesVectorPtr gicp_covariances(const pcl::PointCloud<pcl::PointNormal>& cloud) {
   if (cloud.size() < static_cast<std::size_t>(kCovarianceNeighbours)) return nullptr;
+  return gicp_covariances(cloud, PointIndex<pcl::PointNormal>(cloud));
+}
+
+Gicp::MatricesVectorPtr gicp_covariances(const pcl::PointCloud<pcl::PointNormal>& cloud,
+                                         const PointIndex<pcl::PointNormal>& index) {
+  if (cloud.size() < static_cast<std::size_t>(kCovarianceNeighbours)) return nullptr;
   auto out = std::make_shared<Gicp::MatricesVector>(cloud.size());
-  const PointIndex<pcl::PointNormal> index(cloud);
   std::atomic<bool> short_answer{false};  // a non-finite point, or fewer than k finite ones
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cloud.size(), 512), [&](const auto& range) {
     pcl::Indices nn;

@@ -3,6 +3,8 @@
 #include <pcl/point_types.h>
 #include <pcl/registration/gicp.h>
 
+#include "kd_search.h"
+
 namespace s2c {
 
 using Gicp = pcl::GeneralizedIterativeClosestPoint<pcl::PointNormal, pcl::PointNormal>;
@@ -15,5 +17,8 @@ constexpr int kCovarianceNeighbours = 10;
 /// step. Null when a point has fewer than k finite neighbours (a cloud of fewer than k points,
 /// a non-finite point): GICP cannot run on it.
 Gicp::MatricesVectorPtr gicp_covariances(const pcl::PointCloud<pcl::PointNormal>& cloud);
+/// The same with `index`, an index of `cloud` already built (GICP's target tree): one build less.
+Gicp::MatricesVectorPtr gicp_covariances(const pcl::PointCloud<pcl::PointNormal>& cloud,
+                                         const PointIndex<pcl::PointNormal>& index);
 
 }  // namespace s2c

@@ -60,6 +60,8 @@ class NanoSearch : public pcl::search::KdTree<PointT> {
                      std::vector<float>& k_sqr_distances) const override;
   int radiusSearch(const PointT& point, double radius, pcl::Indices& k_indices, std::vector<float>& k_sqr_distances,
                    unsigned int max_nn = 0) const override;
+  /// The index built by the last setInputCloud, for callers that search the same cloud too.
+  const PointIndex<PointT>& index() const { return index_; }
 
  private:
   PointIndex<PointT> index_;

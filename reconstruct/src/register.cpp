@@ -120,13 +120,16 @@ Fit evaluate(const CloudPN& source, const Eigen::Isometry3d& pose, const CloudPN
 Eigen::Isometry3d icp_refine(const CloudPN::Ptr& source, const CloudPN::Ptr& target, const Eigen::Isometry3d& init,
                              double spacing, const std::vector<double>& radii,
                              const Gicp::MatricesVectorPtr& source_covariances) {
+  // The target's tree, built once: GICP searches it and its covariances come from it.
+  auto target_tree = std::make_shared<NanoSearch<PN>>();
+  target_tree->setInputCloud(target);
   // Too few points for a covariance (PCL's GICP would read an empty covariance list): nothing to
   // refine against, the pose stays.
-  const Gicp::MatricesVectorPtr target_covariances = gicp_covariances(*target);
+  const Gicp::MatricesVectorPtr target_covariances = gicp_covariances(*target, target_tree->index());
   if (!source_covariances || !target_covariances) return init;
   Eigen::Matrix4f guess = init.matrix().cast<float>();
   Gicp gicp;
-  gicp.setSearchMethodTarget(std::make_shared<NanoSearch<PN>>());
+  gicp.setSearchMethodTarget(target_tree, true);  // built above: not again
   gicp.setSearchMethodSource(std::make_shared<NanoSearch<PN>>());
   gicp.setInputSource(source);
   gicp.setInputTarget(target);
