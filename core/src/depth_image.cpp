@@ -155,10 +155,22 @@ DepthImage read_tiff(const fs::path& path) {
   return d;
 }
 
-bool is_png(const fs::path& path) {
+/// What a frame file's first bytes say: whether it is a PNG, and a PNG's size from its IHDR.
+struct FrameHeader {
+  bool png = false;
+  std::optional<std::pair<std::uint32_t, std::uint32_t>> size;
+};
+
+FrameHeader frame_header(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
-  unsigned char sig[8] = {};
-  return in.read(reinterpret_cast<char*>(sig), sizeof sig) && png_sig_cmp(sig, 0, sizeof sig) == 0;
+  unsigned char h[24] = {};
+  in.read(reinterpret_cast<char*>(h), sizeof h);
+  FrameHeader out;
+  out.png = in.gcount() >= 8 && png_sig_cmp(h, 0, 8) == 0;
+  if (!out.png || in.gcount() < static_cast<std::streamsize>(sizeof h) || std::memcmp(h + 12, "IHDR", 4) != 0) return out;
+  auto be32 = [&](int o) { return std::uint32_t(h[o]) << 24 | std::uint32_t(h[o + 1]) << 16 | std::uint32_t(h[o + 2]) << 8 | h[o + 3]; };
+  out.size = std::make_pair(be32(16), be32(20));
+  return out;
 }
 
 /// Appends what libpng writes to a string.
@@ -199,21 +211,15 @@ bool encode_png(const DepthImage& d, std::string& out, PngErrors& errors) {
 
 }  // namespace
 
-std::optional<std::pair<std::uint32_t, std::uint32_t>> png_size(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  unsigned char h[24] = {};
-  if (!in.read(reinterpret_cast<char*>(h), sizeof h)) return std::nullopt;
-  if (png_sig_cmp(h, 0, 8) != 0 || std::memcmp(h + 12, "IHDR", 4) != 0) return std::nullopt;
-  auto be32 = [&](int o) { return std::uint32_t(h[o]) << 24 | std::uint32_t(h[o + 1]) << 16 | std::uint32_t(h[o + 2]) << 8 | h[o + 3]; };
-  return std::make_pair(be32(16), be32(20));
-}
+std::optional<std::pair<std::uint32_t, std::uint32_t>> png_size(const fs::path& path) { return frame_header(path).size; }
 
 DepthImage read_depth_png(const fs::path& path) {
   if (!fs::exists(path)) throw InvalidInput(fmt::format("{}: frame file does not exist", path.string()));
-  if (const auto size = png_size(path); size && (size->first > kMaxSide || size->second > kMaxSide))
+  const FrameHeader header = frame_header(path);
+  if (const auto& size = header.size; size && (size->first > kMaxSide || size->second > kMaxSide))
     throw InvalidInput(fmt::format("{}: PNG header claims {}x{} pixels (at most {}x{})", path.string(), size->first,
                                    size->second, kMaxSide, kMaxSide));
-  return is_png(path) ? read_png(path) : read_tiff(path);
+  return header.png ? read_png(path) : read_tiff(path);
 }
 
 std::string encode_depth_png(const DepthImage& d) {
