@@ -90,11 +90,11 @@ Mesh read_mesh(const fs::path& path) {
 
 namespace {
 
-/// Writes `mesh` as it is; `normals` says whether its vertex normals are to be written (they are
-/// current then).
-void write_as_is(const Mesh& mesh, const fs::path& path, const WriteOptions& options, bool normals) {
+/// Writes `mesh` as it is to `path` in `format`; `normals` says whether its vertex normals are to
+/// be written (they are current then).
+void write_as_is(const Mesh& mesh, const fs::path& path, MeshFormat format, const WriteOptions& options, bool normals) {
   OpenMesh::IO::Options opt;
-  if (options.binary && (mesh_format(path) == MeshFormat::ply || mesh_format(path) == MeshFormat::stl)) {
+  if (options.binary && (format == MeshFormat::ply || format == MeshFormat::stl)) {
     opt += OpenMesh::IO::Options::Binary;
     opt += OpenMesh::IO::Options::LSB;
   }
@@ -105,27 +105,33 @@ void write_as_is(const Mesh& mesh, const fs::path& path, const WriteOptions& opt
   out.commit();
 }
 
-/// Whether `path` gets vertex normals under `options`. \throw InvalidInput for unwritable formats.
-bool wants_normals(const fs::path& path, const WriteOptions& options) {
+/// The format `path` is written in. \throw InvalidInput for formats that cannot be written.
+MeshFormat writable_format(const fs::path& path) {
   silence_openmesh();
   const MeshFormat format = mesh_format(path);
   if (format == MeshFormat::vtk) throw InvalidInput(fmt::format("{}: writing .vtk is not supported", path.string()));
+  return format;
+}
+
+bool wants_normals(MeshFormat format, const WriteOptions& options) {
   return options.vertex_normals && format != MeshFormat::stl;
 }
 
 }  // namespace
 
 void write_mesh(const Mesh& mesh, const fs::path& path, const WriteOptions& options) {
-  if (!wants_normals(path, options)) return write_as_is(mesh, path, options, false);
+  const MeshFormat format = writable_format(path);
+  if (!wants_normals(format, options)) return write_as_is(mesh, path, format, options, false);
   Mesh with_normals = mesh;
   with_normals.update_normals();
-  write_as_is(with_normals, path, options, true);
+  write_as_is(with_normals, path, format, options, true);
 }
 
 void write_mesh(Mesh&& mesh, const fs::path& path, const WriteOptions& options) {
-  const bool normals = wants_normals(path, options);
+  const MeshFormat format = writable_format(path);
+  const bool normals = wants_normals(format, options);
   if (normals) mesh.update_normals();
-  write_as_is(mesh, path, options, normals);
+  write_as_is(mesh, path, format, options, normals);
 }
 
 // ---------------------------------------------------------------------------------------------
