@@ -9,9 +9,11 @@
 #include "s2c/core/errors.h"
 #include "s2c/core/files.h"
 #include "s2c/core/io.h"
+#include "s2c/core/memory.h"
 #include "s2c/core/report.h"
 
 int main(int argc, char** argv) {
+  s2c::reuse_freed_memory();
   CLI::App app{
       "Check whether a mesh is CAD-ready: closed, 2-manifold, consistently outward-oriented, free of\n"
       "self-intersections, degenerate and duplicate faces. Prints one JSON object on stdout with\n"

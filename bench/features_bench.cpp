@@ -41,6 +41,7 @@
 #include "s2c/core/clock.h"
 #include "s2c/core/errors.h"
 #include "s2c/core/io.h"
+#include "s2c/core/memory.h"
 #include "s2c/features/analyze.h"
 
 using namespace s2c;
@@ -480,6 +481,8 @@ int cmd_selfcheck(const Args& a) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // As scan2cad-features does: the timings are those of the stage.
+  s2c::reuse_freed_memory();
   if (argc < 2 || std::string(argv[1]) == "--help") {
     std::printf("%s", kUsage);
     return argc < 2 ? 2 : 0;

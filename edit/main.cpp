@@ -11,6 +11,7 @@
 #include "s2c/core/errors.h"
 #include "s2c/core/files.h"
 #include "s2c/core/io.h"
+#include "s2c/core/memory.h"
 #include "s2c/core/report.h"
 #include "s2c/edit/editor.h"
 #include "s2c/edit/interpreter.h"
@@ -34,6 +35,7 @@ struct Outputs {
 }  // namespace
 
 int main(int argc, char** argv) {
+  s2c::reuse_freed_memory();
   CLI::App app{
       "Edit a mesh through its features with a script (.s2e): select features by type and parameters,\n"
       "set radii, move, rotate or scale features, add or remove constraints, lock features, assert\n"
@@ -100,7 +102,7 @@ int main(int argc, char** argv) {
     {
       s2c::Report::Step t(report, "read");
       script = s2c::edit::parse_script(s2c::read_file(script_path), script_path);
-      mesh = s2c::read_mesh(input);
+      s2c::read_mesh(input, mesh);
       fs = s2c::features::read_features(features_path);
       const std::string hash = s2c::sha256_file(input);
       if (fs.mesh_sha256 != hash)

@@ -6,10 +6,12 @@
 #include "s2c/core/errors.h"
 #include "s2c/core/files.h"
 #include "s2c/core/io.h"
+#include "s2c/core/memory.h"
 #include "s2c/core/report.h"
 #include "s2c/features/analyze.h"
 
 int main(int argc, char** argv) {
+  s2c::reuse_freed_memory();
   CLI::App app{
       "Find the features of a mesh and write them as features.json (format scan2cad.features/1):\n"
       "patches (planes, cylinders, spheres, cones, freeform) with fitted parameters, feature lines\n"
@@ -67,7 +69,7 @@ int main(int argc, char** argv) {
     std::string hash;
     {
       s2c::Report::Step t(report, "read");
-      mesh = s2c::read_mesh(input);
+      s2c::read_mesh(input, mesh);
       hash = s2c::sha256_file(input);
     }
     s2c::features::Analysis analysis;

@@ -6,10 +6,12 @@
 #include "s2c/core/errors.h"
 #include "s2c/core/files.h"
 #include "s2c/core/io.h"
+#include "s2c/core/memory.h"
 #include "s2c/core/report.h"
 #include "s2c/repair/repair.h"
 
 int main(int argc, char** argv) {
+  s2c::reuse_freed_memory();
   CLI::App app{
       "Repair a mesh until it is CAD-ready: closed, 2-manifold, consistently outward-oriented, no\n"
       "self-intersections, no degenerate or duplicate faces (check it with scan2cad check).\n"

@@ -84,9 +84,11 @@ TriangleSoup read_soup(const fs::path& path, bool allow_empty) {
 
 Mesh read_mesh(const fs::path& path) {
   Mesh mesh;
-  soup_to_mesh(read_soup(path), mesh);
+  read_mesh(path, mesh);
   return mesh;
 }
+
+void read_mesh(const fs::path& path, Mesh& mesh) { soup_to_mesh(read_soup(path), mesh); }
 
 namespace {
 

@@ -1,0 +1,17 @@
+#pragma once
+/// \file How the mesh stages take memory from the system.
+
+namespace s2c {
+
+/// Keeps the memory the process frees for its own later allocations instead of handing it back
+/// to the kernel (glibc: no mmap for large blocks, no trimming of the heap). On the virtual
+/// machines this runs on, a page of fresh memory costs 11–15 µs when it is first written (each
+/// 4 KB page fault is a trip through the hypervisor; a page written again costs nothing), and a
+/// stage frees and takes again hundreds of MB of arrays as it goes: the features stage on a
+/// million-vertex mesh took 250 k page faults, 181 k with this (its peak is 169 k pages), the
+/// repair of the plate scan 32 k → 24 k, for a peak at most 2 % higher. Call it first in main().
+/// Not for scan2cad-reconstruct: there the worker threads' blocks all came from the main heap
+/// and its peak, which has a target of its own, grew by a tenth.
+void reuse_freed_memory();
+
+}  // namespace s2c

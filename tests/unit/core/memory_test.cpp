@@ -1,0 +1,40 @@
+#include <gtest/gtest.h>
+
+#include <sys/resource.h>
+
+#include <cstdlib>
+#include <cstring>
+
+#include "s2c/core/memory.h"
+
+namespace {
+
+long minor_page_faults() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_minflt;
+}
+
+/// Page faults taken while a block of `bytes` is allocated, written and freed.
+long faults_to_fill(std::size_t bytes) {
+  const long before = minor_page_faults();
+  char* block = static_cast<char*>(std::malloc(bytes));
+  if (!block) return -1;
+  std::memset(block, 1, bytes);
+  asm volatile("" : : "r"(block) : "memory");  // the block is used: no malloc/free pair to drop
+  std::free(block);
+  return minor_page_faults() - before;
+}
+
+}  // namespace
+
+TEST(Memory, FreedBlocksComeBackWithoutPageFaults) {
+  constexpr std::size_t kBytes = 64u << 20;  // 16,384 pages, above glibc's largest mmap threshold
+  constexpr long kPages = kBytes / 4096;
+  // glibc's default: a block this large is mapped afresh each time, every page faulted in again.
+  faults_to_fill(kBytes);
+  EXPECT_GT(faults_to_fill(kBytes), kPages / 2);
+  s2c::reuse_freed_memory();
+  faults_to_fill(kBytes);  // the heap grows once
+  EXPECT_LT(faults_to_fill(kBytes), kPages / 20);
+}
