@@ -22,6 +22,110 @@ VotingThresholds voting_thresholds(double min_crease_deg, double noise, double e
   return t;
 }
 
+namespace {
+
+/// Largest angle (radians) between a plane group's faces and its first face: small enough that
+/// the vote of faces all within it of one normal is plainly a face vote (λ2/λ1, λ3/λ1 ≤ tan²)
+/// with a hundredfold margin under the thresholds, and wide enough for coplanar faces whose
+/// vertices were rounded to float (a PLY or STL export: about 1e-5 rad at a 2 µm edge).
+double plane_group_angle(const VotingThresholds& t) {
+  const double bound = std::min(t.crease, t.corner);
+  return bound > 0 ? std::min(1e-3, std::atan(std::sqrt(0.01 * bound))) : 0.0;
+}
+
+/// Faces in plane groups: connected across edges, each within `angle` of its group's first face.
+std::vector<int> plane_groups(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, double angle) {
+  const int nf = m.faces();
+  const double cos_min = std::cos(angle);
+  std::vector<int> group(nf, -1), stack;
+  for (int seed = 0; seed < nf; ++seed) {
+    if (group[seed] >= 0) continue;
+    group[seed] = seed;
+    const Eigen::Vector3d& n0 = normals[seed];
+    if (n0.squaredNorm() == 0) continue;  // a degenerate face: a group of its own
+    stack.assign(1, seed);
+    while (!stack.empty()) {
+      const int f = stack.back();
+      stack.pop_back();
+      for (int e : m.face_edges[f]) {
+        if (e < 0) continue;
+        const int g = m.across(e, f);
+        if (g >= 0 && group[g] < 0 && normals[g].dot(n0) >= cos_min) group[g] = seed, stack.push_back(g);
+      }
+    }
+  }
+  return group;
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector4d> face_balls(const MeshArrays& m) {
+  std::vector<Eigen::Vector4d> ball(m.faces());
+  tbb::parallel_for(tbb::blocked_range<int>(0, m.faces(), 4096), [&](const tbb::blocked_range<int>& range) {
+    for (int f = range.begin(); f < range.end(); ++f) {
+      double r2 = 0;
+      for (int u : m.tri[f]) r2 = std::max(r2, (m.pos[u] - m.centroid[f]).squaredNorm());
+      ball[f] << m.centroid[f], std::sqrt(r2);
+    }
+  });
+  return ball;
+}
+
+std::vector<char> plainly_flat(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals,
+                               const std::vector<Eigen::Vector4d>& ball, double radius, const VotingThresholds& t) {
+  const int nv = m.vertices();
+  std::vector<char> flat(nv, 0);
+  const double angle = plane_group_angle(t);
+  if (!(angle > 0) || !(radius > 0) || !m.box.min.allFinite() || !m.box.max.allFinite()) return flat;
+  // A flat vertex: all its faces in one plane group. The faces that vote on a flat vertex v are
+  // then all of its group if no vertex of any of them is a vertex that is not flat: the walk from
+  // v's faces passes only through vertices of voting faces, and a flat one leads only to faces of
+  // the group. A voting face f within the radius of v has its vertices within radius + diameter(f)
+  // of v; so v is plainly flat when no vertex that is not flat lies within that reach of v.
+  const std::vector<int> group = plane_groups(m, normals, angle);
+  std::vector<double> reach(nv, 0.0);
+  tbb::parallel_for(0, nv, [&](int v) {
+    const int begin = m.vf_start[v], end = m.vf_start[v + 1];
+    bool one = begin < end && m.pos[v].allFinite();
+    double widest = 0;  // the largest diameter of v's faces, bounded by that of their balls
+    for (int k = begin; k < end; ++k) {
+      const int f = m.vf[k];
+      one = one && group[f] == group[m.vf[begin]] && normals[f].squaredNorm() > 0;
+      widest = std::max(widest, 2.0 * ball[f][3]);
+    }
+    flat[v] = one;
+    reach[v] = (radius + widest) * (1.0 + 1e-9);
+  });
+  // A grid of cells twice the radius wide: a cell is marked when a vertex that is not flat reaches
+  // into it; a flat vertex in an unmarked cell is plainly flat. Meshes whose grid would be huge
+  // (a tiny radius in a vast box) are voted on as they are.
+  const double cell = 2.0 * radius;
+  const Eigen::Vector3d lo = m.box.min.array() - cell;
+  const Eigen::Array3d span = ((m.box.max - lo).array() / cell).floor() + 2.0;
+  constexpr double kMaxCells = 1 << 26;
+  if (!(span.prod() <= kMaxCells)) return std::vector<char>(nv, 0);
+  const Eigen::Array3i dims = span.cast<int>();
+  auto cell_of = [&](const Eigen::Vector3d& q) { return ((q - lo).array() / cell).floor().cast<int>().eval(); };
+  std::vector<char> marked(static_cast<std::size_t>(span.prod()), 0);
+  for (int v = 0; v < nv; ++v) {
+    if (flat[v] || m.vf_start[v] == m.vf_start[v + 1]) continue;  // isolated vertices vote on nothing
+    if (!m.pos[v].allFinite()) return std::vector<char>(nv, 0);
+    const Eigen::Array3i c = cell_of(m.pos[v]);
+    const int k = static_cast<int>(std::ceil(reach[v] / cell));
+    const Eigen::Array3i a = (c - k).max(0), b = (c + k).min(dims - 1);
+    for (int x = a[0]; x <= b[0]; ++x)
+      for (int y = a[1]; y <= b[1]; ++y)
+        for (int z = a[2]; z <= b[2]; ++z)
+          marked[(static_cast<std::size_t>(x) * dims[1] + y) * dims[2] + z] = 1;
+  }
+  tbb::parallel_for(0, nv, [&](int v) {
+    if (!flat[v]) return;
+    const Eigen::Array3i c = cell_of(m.pos[v]);
+    flat[v] = !marked[(static_cast<std::size_t>(c[0]) * dims[1] + c[1]) * dims[2] + c[2]];
+  });
+  return flat;
+}
+
 std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, double radius,
                                const VotingThresholds& t) {
   const int nv = m.vertices(), nf = m.faces();
@@ -43,14 +147,9 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
   };
   // Per face its centroid and the radius of the ball about it holding the triangle, side by
   // side: the test that rejects most queued faces then reads one cache line, not two arrays.
-  std::vector<Eigen::Vector4d> ball(nf);
-  tbb::parallel_for(tbb::blocked_range<int>(0, nf, 4096), [&](const tbb::blocked_range<int>& range) {
-    for (int f = range.begin(); f < range.end(); ++f) {
-      double r2 = 0;
-      for (int u : m.tri[f]) r2 = std::max(r2, (m.pos[u] - m.centroid[f]).squaredNorm());
-      ball[f] << m.centroid[f], std::sqrt(r2);
-    }
-  });
+  const std::vector<Eigen::Vector4d> ball = face_balls(m);
+  // Vertices amid a plane (most of a CAD part's) are face vertices whatever the exact weights.
+  const std::vector<char> flat = plainly_flat(m, normals, ball, radius, t);
   tbb::enumerable_thread_specific<Scratch> scratch(
       [nf, nv] { return Scratch{std::vector<int>(nf, -1), std::vector<int>(nv, -1), {}, {}, {}}; });
   // Vertices in the order the faces first reach them: neighbours are then voted on one after the
@@ -69,6 +168,14 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
     Scratch& s = scratch.local();
     for (int i = range.begin(); i < range.end(); ++i) {
       const int v = order[i];
+      if (flat[v]) {
+        VertexTensor& out_v = out[v];
+        out_v.lambda = Eigen::Vector3d(1.0, 0.0, 0.0);
+        out_v.e1 = normals[m.vf[m.vf_start[v]]];
+        out_v.e3 = out_v.e1.unitOrthogonal();
+        out_v.cls = VertexClass::face;
+        continue;
+      }
       const Eigen::Vector3d p = m.pos[v];
       Eigen::Matrix3d T = Eigen::Matrix3d::Zero();
       s.queue.clear();

@@ -14,6 +14,7 @@
 #include "s2c/features/analyze.h"
 #include "features_eval.h"
 #include "mesh_arrays.h"
+#include "tensor_voting.h"
 #include "test_util.h"
 #include "truth_match.h"
 
@@ -154,7 +155,7 @@ TEST(FeaturesReal, CgalFandiskHasPlanesCylindersAndLines) {
 
 /// Tensor voting's search (a breadth-first walk over faces, pruned by bounding balls and squared
 /// distances) must find exactly the faces within the radius: compared with a sum over every face.
-void expect_vote_matches_all_faces(const TriangleSoup& soup, double radius) {
+void expect_vote_matches_all_faces(const TriangleSoup& soup, double radius, double tolerance = 1e-9) {
   Mesh mesh;
   soup_to_mesh(soup, mesh);
   const TriangleSoup s = mesh_to_soup(mesh);  // the mesh's own numbering
@@ -180,8 +181,8 @@ void expect_vote_matches_all_faces(const TriangleSoup& soup, double radius) {
     const Eigen::Vector3d ev = es.eigenvalues();
     if (!(ev[2] > 0)) continue;
     const Eigen::Vector3d lambda(1.0, std::max(ev[1], 0.0) / ev[2], std::max(ev[0], 0.0) / ev[2]);
-    EXPECT_NEAR(got[v].lambda[1], lambda[1], 1e-9) << "vertex " << v;
-    EXPECT_NEAR(got[v].lambda[2], lambda[2], 1e-9) << "vertex " << v;
+    EXPECT_NEAR(got[v].lambda[1], lambda[1], tolerance) << "vertex " << v;
+    EXPECT_NEAR(got[v].lambda[2], lambda[2], tolerance) << "vertex " << v;
     ++checked;
   }
   EXPECT_GT(checked, 0);
@@ -199,6 +200,38 @@ TEST(TensorVoting, FindsExactlyTheFacesWithinTheRadius) {
   for (auto& q : ball.vertices) q += Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng));
   expect_vote_matches_all_faces(ball, 0.8);
   expect_vote_matches_all_faces(ball, 2.5);
+}
+
+/// Vertices amid a plane skip the walk (plainly_flat): on a sheet folded by 40° most vertices do,
+/// and every vertex's λ and class still match the sum over every face, the ones the fold passes
+/// within the radius of included.
+TEST(TensorVoting, PlainlyFlatVerticesGetTheVoteOfEveryFace) {
+  constexpr int n = 30;
+  const double fold = 40.0 * M_PI / 180.0;
+  const TriangleSoup sheet = test::obliquely_rotated(test::grid(n, [](int, int) { return true; }, [&](double x, double y) {
+    const double past = std::max(0.0, x - n / 2.0);
+    return Eigen::Vector3d(std::min(x, n / 2.0) + past * std::cos(fold), y, past * std::sin(fold));
+  }));
+  Mesh m;
+  soup_to_mesh(sheet, m);
+  const MeshArrays a = build_arrays(m);
+  const double radius = 1.5 * a.median_edge;
+  const VotingThresholds t = voting_thresholds(20.0, 0.0, a.median_edge);
+  const std::vector<char> flat = plainly_flat(a, a.fnormal, face_balls(a), radius, t);
+  const auto plain = std::count(flat.begin(), flat.end(), 1);
+  EXPECT_GT(plain, a.vertices() / 2);
+  EXPECT_LT(plain, a.vertices() - 2 * (n + 1));  // not the fold's vertices nor their neighbours
+  // A plainly flat vertex gets λ2 = λ3 = 0; the closed-form eigenvalues of the summed, nearly
+  // rank-one tensor come out a few 1e-9 of λ1 instead (far below any threshold: 0.015 here).
+  expect_vote_matches_all_faces(sheet, radius, 1e-7);
+  const std::vector<VertexTensor> got = vote(a, a.fnormal, radius, t);
+  for (int v = 0; v < a.vertices(); ++v) {
+    if (flat[v]) {
+      EXPECT_EQ(got[v].cls, VertexClass::face) << v;
+    }
+  }
+  EXPECT_GE(std::count_if(got.begin(), got.end(), [](const VertexTensor& x) { return x.cls == VertexClass::crease; }),
+            n + 1);  // the fold
 }
 
 TEST(FeaturesInput, EmptyMeshIsRefused) {
