@@ -111,7 +111,8 @@ std::vector<char> plainly_flat(const MeshArrays& m, const std::vector<Eigen::Vec
     if (flat[v] || m.vf_start[v] == m.vf_start[v + 1]) continue;  // isolated vertices vote on nothing
     if (!m.pos[v].allFinite()) return std::vector<char>(nv, 0);
     const Eigen::Array3i c = cell_of(m.pos[v]);
-    const int k = static_cast<int>(std::ceil(reach[v] / cell));
+    // (At most the grid's size: a reach beyond it, or not finite, marks every cell.)
+    const int k = static_cast<int>(std::min(std::ceil(reach[v] / cell), static_cast<double>(dims.maxCoeff())));
     const Eigen::Array3i a = (c - k).max(0), b = (c + k).min(dims - 1);
     for (int x = a[0]; x <= b[0]; ++x)
       for (int y = a[1]; y <= b[1]; ++y)
