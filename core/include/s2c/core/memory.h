@@ -9,7 +9,7 @@ namespace s2c {
 /// 4 KB page fault is a trip through the hypervisor; a page written again costs nothing), and a
 /// stage frees and takes again hundreds of MB of arrays as it goes: the features stage on a
 /// million-vertex mesh took 250 k page faults, 181 k with this (its peak is 169 k pages), the
-/// repair of the plate scan 32 k → 24 k, for a peak at most 2 % higher. Call it first in main().
+/// repair of the plate scan 32 k → 23–24 k, for a peak at most 2 % higher. Call it first in main().
 /// Not for scan2cad-reconstruct: there the worker threads' blocks all came from the main heap
 /// and its peak, which has a target of its own, grew by a tenth.
 void reuse_freed_memory();
