@@ -83,18 +83,14 @@ std::vector<char> plainly_flat(const MeshArrays& m, const std::vector<Eigen::Vec
   // the group. A voting face f within the radius of v has its vertices within radius + diameter(f)
   // of v; so v is plainly flat when no vertex that is not flat lies within that reach of v.
   const std::vector<int> group = plane_groups(m, normals, angle);
-  std::vector<double> reach(nv, 0.0);
   tbb::parallel_for(0, nv, [&](int v) {
     const int begin = m.vf_start[v], end = m.vf_start[v + 1];
     bool one = begin < end && m.pos[v].allFinite();
-    double widest = 0;  // the largest diameter of v's faces, bounded by that of their balls
-    for (int k = begin; k < end; ++k) {
+    for (int k = begin; one && k < end; ++k) {
       const int f = m.vf[k];
-      one = one && group[f] == group[m.vf[begin]] && normals[f].squaredNorm() > 0;
-      widest = std::max(widest, 2.0 * ball[f][3]);
+      one = group[f] == group[m.vf[begin]] && normals[f].squaredNorm() > 0;
     }
     flat[v] = one;
-    reach[v] = (radius + widest) * (1.0 + 1e-9);
   });
   // A grid of cells twice the radius wide: a cell is marked when a vertex that is not flat reaches
   // into it; a flat vertex in an unmarked cell is plainly flat. Meshes whose grid would be huge
@@ -106,23 +102,26 @@ std::vector<char> plainly_flat(const MeshArrays& m, const std::vector<Eigen::Vec
   if (!(span.prod() <= kMaxCells)) return std::vector<char>(nv, 0);
   const Eigen::Array3i dims = span.cast<int>();
   auto cell_of = [&](const Eigen::Vector3d& q) { return ((q - lo).array() / cell).floor().cast<int>().eval(); };
+  auto cell_index = [&](int x, int y, int z) { return (static_cast<std::size_t>(x) * dims[1] + y) * dims[2] + z; };
   std::vector<char> marked(static_cast<std::size_t>(span.prod()), 0);
   for (int v = 0; v < nv; ++v) {
     if (flat[v] || m.vf_start[v] == m.vf_start[v + 1]) continue;  // isolated vertices vote on nothing
     if (!m.pos[v].allFinite()) return std::vector<char>(nv, 0);
+    double widest = 0;  // the largest diameter of v's faces, bounded by that of their balls
+    for (int k = m.vf_start[v]; k < m.vf_start[v + 1]; ++k) widest = std::max(widest, 2.0 * ball[m.vf[k]][3]);
+    const double reach = (radius + widest) * (1.0 + 1e-9);
     const Eigen::Array3i c = cell_of(m.pos[v]);
     // (At most the grid's size: a reach beyond it, or not finite, marks every cell.)
-    const int k = static_cast<int>(std::min(std::ceil(reach[v] / cell), static_cast<double>(dims.maxCoeff())));
+    const int k = static_cast<int>(std::min(std::ceil(reach / cell), static_cast<double>(dims.maxCoeff())));
     const Eigen::Array3i a = (c - k).max(0), b = (c + k).min(dims - 1);
     for (int x = a[0]; x <= b[0]; ++x)
       for (int y = a[1]; y <= b[1]; ++y)
-        for (int z = a[2]; z <= b[2]; ++z)
-          marked[(static_cast<std::size_t>(x) * dims[1] + y) * dims[2] + z] = 1;
+        for (int z = a[2]; z <= b[2]; ++z) marked[cell_index(x, y, z)] = 1;
   }
   tbb::parallel_for(0, nv, [&](int v) {
     if (!flat[v]) return;
     const Eigen::Array3i c = cell_of(m.pos[v]);
-    flat[v] = !marked[(static_cast<std::size_t>(c[0]) * dims[1] + c[1]) * dims[2] + c[2]];
+    flat[v] = !marked[cell_index(c[0], c[1], c[2])];
   });
   return flat;
 }
