@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
+#include <tbb/parallel_invoke.h>
 
 #include "lines.h"
 #include "mesh_arrays.h"
@@ -181,8 +182,9 @@ Analysis analyze(const Mesh& mesh, const FeatureOptions& o, nlohmann::json* repo
     f.lines.push_back(std::move(line));
   }
   t = Clock::now();
-  add_adjacency(m, seg, f);
-  add_components(m, seg, f);
+  // Independent (one fills the adjacency, the other the component groups), 0.05 s each at a
+  // million vertices: side by side.
+  tbb::parallel_invoke([&] { add_adjacency(m, seg, f); }, [&] { add_components(m, seg, f); });
   int constraints = 0;
   const std::size_t feature_count = f.patches.size() + f.lines.size();
   const bool too_many = feature_count > kMaxConstraintFeatures;

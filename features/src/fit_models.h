@@ -99,22 +99,24 @@ struct AxisModel {
     if (!at_current_) geometry(a, p);
     const double ct = std::cos(theta), st = std::sin(theta);
     const Vector3d u = uv.col(0), t = uv.col(1);
-    const auto vx = x_ - p.x(), vy = y_ - p.y(), vz = z_ - p.z();
-    // On the axis the distance is not differentiable; any direction is a subgradient.
-    const Array wu = (rho_ > 0).select(((wx_ * u.x() + wy_ * u.y()) + wz_ * u.z()) / rho_, 0.0);
-    const Array wt = (rho_ > 0).select(((wx_ * t.x() + wy_ * t.y()) + wz_ * t.z()) / rho_, 0.0);
-    const Array ud = (vx * u.x() + vy * u.y()) + vz * u.z(), td = (vx * t.x() + vy * t.y()) + vz * t.z();
-    const Array c0 = sw_ * ((-ct) * h_ * wu - st * ud), c1 = sw_ * ((-ct) * h_ * wt - st * td);
-    const Array c2 = (-sw_) * ct * wu, c3 = (-sw_) * ct * wt, c4 = (-sw_) * ct;
-    Array c5;
-    if constexpr (K > 5) c5 = sw_ * ((-(rho_ - r)) * st - h_ * ct);
+    // One pass straight into J's rows, the u and v entries side by side, two per instruction;
+    // each lane is the arithmetic of its entry alone, in the order the per-entry array passes
+    // had (their eight temporaries cost a malloc each per iteration).
+    const Eigen::Array2d ex(u.x(), t.x()), ey(u.y(), t.y()), ez(u.z(), t.z());
     for (Eigen::Index i = 0; i < x_.size(); ++i) {
-      J(i, 0) = c0[i];
-      J(i, 1) = c1[i];
-      J(i, 2) = c2[i];
-      J(i, 3) = c3[i];
-      J(i, 4) = c4[i];
-      if constexpr (K > 5) J(i, K - 1) = c5[i];
+      const double vx = x_[i] - p.x(), vy = y_[i] - p.y(), vz = z_[i] - p.z();
+      const double rho = rho_[i], h = h_[i], sw = sw_[i];
+      // (w·u, w·t)/rho; on the axis the distance is not differentiable, any direction is a
+      // subgradient.
+      Eigen::Array2d w = ((wx_[i] * ex + wy_[i] * ey) + wz_[i] * ez) / rho;
+      if (!(rho > 0)) w.setZero();
+      const Eigen::Array2d d = (vx * ex + vy * ey) + vz * ez;  // (u·v, t·v)
+      double* row = J.data() + i * K;
+      Eigen::Map<Eigen::Array2d> tilts(row), shifts(row + 2);
+      tilts = sw * (((-ct) * h) * w - st * d);
+      shifts = ((-sw) * ct) * w;
+      row[4] = (-sw) * ct;
+      if constexpr (K > 5) row[K - 1] = sw * ((-(rho - r)) * st - h * ct);
     }
   }
   void update(const Vec& d) {

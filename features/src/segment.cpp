@@ -524,7 +524,7 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
   const double barrier_deg = p.noisy ? std::min(p.min_crease_deg, kSeedTurnDeg) : p.min_crease_deg;
   const double cos_min = std::cos(barrier_deg * M_PI / 180.0);
   std::vector<char> sharp(ne);
-  for (int e = 0; e < ne; ++e) sharp[e] = sharp_edge(m, normals, e, cos_min);
+  tbb::parallel_for(0, ne, [&](int e) { sharp[e] = sharp_edge(m, normals, e, cos_min); });
 
   Segmentation seg;
   const std::vector<char> usable(nf, 1);
