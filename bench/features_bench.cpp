@@ -8,6 +8,7 @@
 //   s2c-bench-features mesh MESH TRUTH [--features F.json | --features-out F.json] [--line-tol MM] [--verbose]
 //   s2c-bench-features speed [--mesh MESH] [--vertices 1000000] [--repeat 3] [--write SUBDIVIDED.ply]
 //   s2c-bench-features selfcheck [--parts DIR]
+//   s2c-bench-features fits [--repeat 100]
 //   s2c-bench-features inputs [--parts DIR] [--names …] [--sigma …] [--div 100] [--seed 1] [--out DIR]
 //
 // sweep: per part, the OpenSCAD mesh as exported ("clean CAD", σ = 0), then the mesh refined by
@@ -17,6 +18,11 @@
 // missed primitives, wrong constraints and missed constraint pairs on stderr.
 // speed: 1→4 midpoint subdivision of MESH (default the CGAL fandisk) until ≥ --vertices, then
 // analyze() timed (best of --repeat) with TBB's default thread count.
+// fits: the surface fits alone (fit_cone + fit_cylinder + fit_sphere) on samples of a torus band,
+// which none of them fits exactly (as on a fillet, where the solvers work longest), at 60, 250,
+// 1000 and 4000 samples: ms per three fits, best of --repeat, and a checksum of the results that
+// must not move when a change is meant to leave them bit for bit. Run it under `taskset -c 0`:
+// on one core it varies by a few per cent where the whole analysis varies by tens.
 // inputs: the sweep's inputs (sizes, edge length, 1st percentile of the smallest angle), written as
 // PLY into --out when given (for peers and for looking at them).
 // selfcheck: the truth of every part converted to a FeatureSet on the part's mesh must evaluate
@@ -27,6 +33,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <random>
 #include <set>
 #include <sstream>
 #include <string>
@@ -43,6 +50,7 @@
 #include "s2c/core/io.h"
 #include "s2c/core/memory.h"
 #include "s2c/features/analyze.h"
+#include "s2c/features/shape.h"
 
 using namespace s2c;
 using bench::FeatureMetrics;
@@ -93,6 +101,7 @@ const char* kUsage =
     "                                [--json OUT.json] [--verbose]\n"
     "       s2c-bench-features speed [--mesh MESH] [--vertices 1000000] [--repeat 3] [--write SUBDIVIDED.ply]\n"
     "       s2c-bench-features selfcheck [--parts DIR]\n"
+    "       s2c-bench-features fits [--repeat 100]\n"
     "       s2c-bench-features inputs [--parts DIR] [--names …] [--sigma …] [--div 100] [--seed 1] [--out DIR]\n";
 
 // ----------------------------------------------------------------------------- table
@@ -346,6 +355,43 @@ int cmd_speed(const Args& a) {
   return 0;
 }
 
+// ----------------------------------------------------------------------------- fits
+/// n samples of the torus (R, r) over u ∈ [0, 0.8], v ∈ [0.2, 0.9] (radians), with its normals.
+features::Samples torus_band(int n, double R, double r, unsigned seed) {
+  features::Samples s;
+  std::mt19937 g(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int i = 0; i < n; ++i) {
+    const double u = 0.8 * unit(g), v = 0.2 + 0.7 * unit(g);
+    const Eigen::Vector3d normal(std::cos(v) * std::cos(u), std::cos(v) * std::sin(u), std::sin(v));
+    s.points.push_back(Eigen::Vector3d(R * std::cos(u), R * std::sin(u), 0.0) + r * normal);
+    s.normals.push_back(normal);
+    s.weights.push_back(1.0);
+  }
+  return s;
+}
+
+int cmd_fits(const Args& a) {
+  const int repeat = std::max(1, std::stoi(a.get("--repeat", "100")));
+  std::printf("| samples | cone + cylinder + sphere, best of %d (ms) |\n|---|---|\n", repeat);
+  double checksum = 0.0;
+  for (int n : {60, 250, 1000, 4000}) {
+    const features::Samples s = torus_band(n, 10.0, 2.0, static_cast<unsigned>(n));
+    double best = 1e30;
+    for (int k = 0; k < repeat; ++k) {
+      const auto t0 = Clock::now();
+      const features::Fit c = features::fit_cone(s), y = features::fit_cylinder(s), p = features::fit_sphere(s);
+      best = std::min(best, seconds_since(t0));
+      if (k == 0)
+        checksum += c.rms + y.rms + p.rms + c.shape.point.sum() + c.shape.dir.sum() + y.shape.point.sum() +
+                    y.shape.dir.sum() + y.shape.radius + p.shape.point.sum() + p.shape.radius;
+    }
+    std::printf("| %d | %.3f |\n", n, best * 1e3);
+  }
+  std::printf("\nchecksum %.17g\n", checksum);
+  return 0;
+}
+
 // ----------------------------------------------------------------------------- selfcheck
 int failures = 0;
 
@@ -499,6 +545,7 @@ int main(int argc, char** argv) {
     if (cmd == "inputs") return cmd_inputs(a);
     if (cmd == "speed") return cmd_speed(a);
     if (cmd == "selfcheck") return cmd_selfcheck(a);
+    if (cmd == "fits") return cmd_fits(a);
     std::fprintf(stderr, "s2c-bench-features: unknown command %s\n%s", cmd.c_str(), kUsage);
     return 2;
   } catch (const InvalidInput& e) {
