@@ -489,9 +489,9 @@ void index_faces(Segmentation& seg) {
 }
 
 /// Drops the regions for which `drop` is true and renumbers the rest; faces of dropped regions
-/// become unassigned (-1). Returns each old region's new number (-1: dropped).
+/// become unassigned (-1).
 template <class Drop>
-std::vector<int> drop_regions(Segmentation& seg, Drop drop) {
+void drop_regions(Segmentation& seg, Drop drop) {
   std::vector<int> remap(seg.regions.size(), -1);
   std::vector<Region> kept;
   for (std::size_t r = 0; r < seg.regions.size(); ++r)
@@ -502,7 +502,6 @@ std::vector<int> drop_regions(Segmentation& seg, Drop drop) {
   seg.regions = std::move(kept);
   for (int& r : seg.face_region)
     if (r >= 0) r = remap[r];
-  return remap;
 }
 
 /// Region pairs ordered (smaller number first), sorted, each once.
