@@ -9,6 +9,7 @@
 //   s2c-bench-features speed [--mesh MESH] [--vertices 1000000] [--repeat 3] [--write SUBDIVIDED.ply]
 //   s2c-bench-features selfcheck [--parts DIR]
 //   s2c-bench-features fits [--repeat 100]
+//   s2c-bench-features voting [--mesh MESH] [--vertices 1000000] [--repeat 10]
 //   s2c-bench-features inputs [--parts DIR] [--names …] [--sigma …] [--div 100] [--seed 1] [--out DIR]
 //
 // sweep: per part, the OpenSCAD mesh as exported ("clean CAD", σ = 0), then the mesh refined by
@@ -29,6 +30,7 @@
 // to 1 everywhere; copies with one plane rotated and one radius scaled must lose exactly those
 // features (5°, +5 %) or nothing (1.5°, +1.5 %). Exit 1 on any failure (CTest bench_features_selfcheck).
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -102,6 +104,7 @@ const char* kUsage =
     "       s2c-bench-features speed [--mesh MESH] [--vertices 1000000] [--repeat 3] [--write SUBDIVIDED.ply]\n"
     "       s2c-bench-features selfcheck [--parts DIR]\n"
     "       s2c-bench-features fits [--repeat 100]\n"
+    "       s2c-bench-features voting [--mesh MESH] [--vertices 1000000] [--repeat 10]\n"
     "       s2c-bench-features inputs [--parts DIR] [--names …] [--sigma …] [--div 100] [--seed 1] [--out DIR]\n";
 
 // ----------------------------------------------------------------------------- table
@@ -355,6 +358,39 @@ int cmd_speed(const Args& a) {
   return 0;
 }
 
+/// The tensor voting alone on the speed command's mesh (vote_tensors: the mesh's arrays, then the
+/// vote at the clean default radius of one median edge), best of --repeat, with the class counts.
+int cmd_voting(const Args& a) {
+  const std::string path = a.get("--mesh", std::string(S2C_SHARED_DIR) + "/data/real/cad/cgal_fandisk.off");
+  const std::size_t target = std::stoull(a.get("--vertices", "1000000"));
+  const int repeat = std::max(1, std::stoi(a.get("--repeat", "10")));
+  TriangleSoup soup = read_soup(path);
+  while (soup.vertices.size() < target) soup = subdivide(soup);
+  Mesh mesh;
+  soup_to_mesh(soup, mesh);
+  mesh.update_normals();
+  std::vector<double> lengths;
+  for (const auto e : mesh.edges()) lengths.push_back(mesh.calc_edge_length(e));
+  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+  const double edge = lengths[lengths.size() / 2];  // the clean default radius: one median edge
+  double best = 1e30;
+  std::array<std::size_t, 3> classes{};
+  for (int i = 0; i < repeat; ++i) {
+    const auto t0 = Clock::now();
+    const auto tensors = features::vote_tensors(mesh, edge, features::FeatureOptions{}.min_crease_deg, 0.0);
+    best = std::min(best, seconds_since(t0));
+    if (i == 0)
+      for (const auto& t : tensors) ++classes[static_cast<int>(t.cls)];
+  }
+  std::printf("| mesh | vertices | arrays + vote, best of %d (s) | face | crease | corner |\n|---|---|---|---|---|---|\n",
+              repeat);
+  std::printf("| %s | %zu | %.3f | %zu | %zu | %zu |\n", std::filesystem::path(path).filename().string().c_str(),
+              mesh.n_vertices(), best, classes[static_cast<int>(features::VertexClass::face)],
+              classes[static_cast<int>(features::VertexClass::crease)],
+              classes[static_cast<int>(features::VertexClass::corner)]);
+  return 0;
+}
+
 // ----------------------------------------------------------------------------- fits
 /// n samples of the torus (R, r) over u ∈ [0, 0.8], v ∈ [0.2, 0.9] (radians), with its normals.
 features::Samples torus_band(int n, double R, double r, unsigned seed) {
@@ -546,6 +582,7 @@ int main(int argc, char** argv) {
     if (cmd == "speed") return cmd_speed(a);
     if (cmd == "selfcheck") return cmd_selfcheck(a);
     if (cmd == "fits") return cmd_fits(a);
+    if (cmd == "voting") return cmd_voting(a);
     std::fprintf(stderr, "s2c-bench-features: unknown command %s\n%s", cmd.c_str(), kUsage);
     return 2;
   } catch (const InvalidInput& e) {

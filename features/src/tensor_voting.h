@@ -24,8 +24,8 @@ std::vector<Eigen::Vector4d> face_balls(const MeshArrays& m);
 /// Vertices whose vote is plainly a face vote, without voting: every face within `radius` of the
 /// vertex lies in one plane (its faces' normals within a small angle of one another, see
 /// tensor_voting.cpp). Conservative: a vertex it leaves out is voted on as usual.
-std::vector<char> plainly_flat(const MeshArrays& m, const std::vector<Eigen::Vector3d>& face_normals,
-                               const std::vector<Eigen::Vector4d>& balls, double radius, const VotingThresholds& t);
+std::vector<char> plainly_flat(const MeshArrays& m, const std::vector<Eigen::Vector3d>& face_normals, double radius,
+                               const VotingThresholds& t);
 
 /// The tensors of all vertices. Plainly flat vertices get λ = (1, 0, 0), e1 their faces' normal
 /// (exact up to tan² of 1e-3 rad) without the walk over their neighbourhood.
