@@ -178,10 +178,10 @@ std::vector<char> plainly_flat(const MeshArrays& m, const std::vector<Eigen::Vec
   });
   if (bad) return std::vector<char>(nv, 0);
   for (int f = 0; f < nf; ++f) first[f + 1] += first[f];
-  // Entering and sorting the rim faces costs about what voting on as many flat vertices does: when
-  // there are many more entries than flat vertices (few planes, or faces much longer than the
-  // radius), the flat vertices are voted on as they are.
-  if (first[nf] > 4 * flats + 4096) return std::vector<char>(nv, 0);
+  // An entry costs a few per cent of a vertex's vote (sorting it, testing it): when there are
+  // many more entries than flat vertices (few planes, or faces much longer than the radius), the
+  // flat vertices are voted on as they are.
+  if (first[nf] > 16 * flats + 65536) return std::vector<char>(nv, 0);
   std::vector<CellEntry> entries(first[nf]);
   tbb::parallel_for(0, nf, [&](int f) {
     if (first[f] == first[f + 1]) return;
