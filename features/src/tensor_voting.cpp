@@ -45,8 +45,8 @@ double plane_group_angle(const VotingThresholds& t) {
 /// face: the same bound, but a sequential walk over every face, 0.1 s at 1.9 M faces.)
 std::vector<std::int64_t> plane_groups(const std::vector<Eigen::Vector3d>& normals, double angle) {
   const double inv = 2.0 / angle;
+  if (!(inv < (1 << 19))) return {};  // (the keys, up to side³, then stay far below 2^63)
   const std::int64_t half = static_cast<std::int64_t>(std::ceil(inv)) + 2, side = 2 * half + 1;
-  if (!(inv < (1 << 20))) return {};
   std::vector<std::int64_t> group(normals.size());
   tbb::parallel_for(std::size_t{0}, normals.size(), [&](std::size_t f) {
     const Eigen::Vector3d& n = normals[f];
@@ -54,7 +54,7 @@ std::vector<std::int64_t> plane_groups(const std::vector<Eigen::Vector3d>& norma
       group[f] = -1;
       return;
     }
-    const Eigen::Array3d c = (n.array() * inv).round() + static_cast<double>(half);
+    const Eigen::Array3d c = (n.normalized().array() * inv).round() + static_cast<double>(half);
     group[f] = (static_cast<std::int64_t>(c[0]) * side + static_cast<std::int64_t>(c[1])) * side +
                static_cast<std::int64_t>(c[2]);
   });
