@@ -314,19 +314,30 @@ TriangleSoup subdivide(const TriangleSoup& in) {
   return out;
 }
 
-int cmd_speed(const Args& a) {
-  const std::string path = a.get("--mesh", std::string(S2C_SHARED_DIR) + "/data/real/cad/cgal_fandisk.off");
+/// --mesh (default the CGAL fandisk) subdivided 1→4 until it has --vertices (default 1 M) into
+/// `mesh`; returns the number of subdivisions.
+int subdivided_mesh(const Args& a, const std::string& path, Mesh& mesh) {
   const std::size_t target = std::stoull(a.get("--vertices", "1000000"));
-  const int repeat = std::stoi(a.get("--repeat", "3"));
   TriangleSoup soup = read_soup(path);
   int levels = 0;
   while (soup.vertices.size() < target) {
     soup = subdivide(soup);
     ++levels;
   }
-  Mesh mesh;
   soup_to_mesh(soup, mesh);
   mesh.update_normals();
+  return levels;
+}
+
+std::string speed_mesh_path(const Args& a) {
+  return a.get("--mesh", std::string(S2C_SHARED_DIR) + "/data/real/cad/cgal_fandisk.off");
+}
+
+int cmd_speed(const Args& a) {
+  const std::string path = speed_mesh_path(a);
+  const int repeat = std::stoi(a.get("--repeat", "3"));
+  Mesh mesh;
+  const int levels = subdivided_mesh(a, path, mesh);
   if (const std::string out = a.get("--write", ""); !out.empty()) write_mesh(mesh, out);  // for timing `scan2cad features` on it
   double best = 1e30, first = 0.0;
   nlohmann::json best_report;
@@ -361,14 +372,10 @@ int cmd_speed(const Args& a) {
 /// The tensor voting alone on the speed command's mesh (vote_tensors: the mesh's arrays, then the
 /// vote at the clean default radius of one median edge), best of --repeat, with the class counts.
 int cmd_voting(const Args& a) {
-  const std::string path = a.get("--mesh", std::string(S2C_SHARED_DIR) + "/data/real/cad/cgal_fandisk.off");
-  const std::size_t target = std::stoull(a.get("--vertices", "1000000"));
+  const std::string path = speed_mesh_path(a);
   const int repeat = std::max(1, std::stoi(a.get("--repeat", "10")));
-  TriangleSoup soup = read_soup(path);
-  while (soup.vertices.size() < target) soup = subdivide(soup);
   Mesh mesh;
-  soup_to_mesh(soup, mesh);
-  mesh.update_normals();
+  subdivided_mesh(a, path, mesh);
   std::vector<double> lengths;
   for (const auto e : mesh.edges()) lengths.push_back(mesh.calc_edge_length(e));
   std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include <Eigen/Eigenvalues>
 #include <tbb/enumerable_thread_specific.h>
@@ -92,6 +93,18 @@ std::vector<int> vertex_order(const MeshArrays& m) {
   return order;
 }
 
+/// Squared distance from p to face f, or infinity when the ball about the face's centroid that
+/// holds it (ball[f]) already lies beyond `far` of p. Compared squared, with a margin that keeps
+/// every face within reach: no square root on the path of every face tested. The walk of vote()
+/// and plainly_flat both test faces with it, so a face one counts as within reach the other does.
+double squared_distance_within(const MeshArrays& m, const std::vector<Eigen::Vector4d>& ball, int f,
+                               const Eigen::Vector3d& p, double far) {
+  const double beyond = (ball[f][3] + far) * (1.0 + 1e-9);
+  if ((ball[f].head<3>() - p).squaredNorm() > beyond * beyond) return std::numeric_limits<double>::infinity();
+  const auto& tri = m.tri[f];
+  return (closest_point_on_triangle(p, m.pos[tri[0]], m.pos[tri[1]], m.pos[tri[2]]) - p).squaredNorm();
+}
+
 /// A face of the grid of plainly_flat: the cell's key, the face and its plane group.
 struct CellEntry {
   std::uint64_t key;
@@ -99,29 +112,21 @@ struct CellEntry {
   int face;
 };
 
-}  // namespace
-
-namespace {
-
-/// plainly_flat, which also gives vertex_order(m).
+/// plainly_flat, with the balls of face_balls(m) and the order of vertex_order(m).
 std::vector<char> plainly_flat(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals,
                                const std::vector<Eigen::Vector4d>& ball, double radius, const VotingThresholds& t,
-                               std::vector<int>& order) {
+                               const std::vector<int>& order) {
   const int nv = m.vertices(), nf = m.faces();
   std::vector<char> flat(nv, 0);
   const double angle = plane_group_angle(t);
-  if (!(angle > 0) || !(radius > 0) || !m.box.min.allFinite() || !m.box.max.allFinite()) {
-    order = vertex_order(m);
-    return flat;
-  }
+  if (!(angle > 0) || !(radius > 0) || !m.box.min.allFinite() || !m.box.max.allFinite()) return flat;
   // A flat vertex: all its faces in one plane group. The vote of a flat vertex v walks from v's
   // faces (all in v's group G) over faces within the radius that share a vertex; the first face
   // of another group it reaches shares a vertex with a face of G, a vertex that is not flat. So
   // v's vote is all of G (a face vote) unless some face that touches a vertex that is not flat
   // (a rim face), of a group other than G, lies within the radius of v: v is plainly flat when
   // none does. (Faces within the radius but not reached by the walk only make the test stricter.)
-  std::vector<std::int64_t> group;
-  tbb::parallel_invoke([&] { order = vertex_order(m); }, [&] { group = plane_groups(normals, angle); });
+  const std::vector<std::int64_t> group = plane_groups(normals, angle);
   if (group.empty()) return flat;
   tbb::parallel_for(0, nv, [&](int v) {
     const int begin = m.vf_start[v], end = m.vf_start[v + 1];
@@ -220,11 +225,7 @@ std::vector<char> plainly_flat(const MeshArrays& m, const std::vector<Eigen::Vec
       const std::int64_t own = group[m.vf[m.vf_start[v]]];
       for (std::size_t k = begin; k < end; ++k) {
         const CellEntry& e = entries[k];
-        if (e.group == own) continue;
-        const double beyond = (ball[e.face][3] + far) * (1.0 + 1e-9);  // vote()'s first test
-        if ((ball[e.face].head<3>() - p).squaredNorm() > beyond * beyond) continue;
-        const auto& tri = m.tri[e.face];
-        if ((closest_point_on_triangle(p, m.pos[tri[0]], m.pos[tri[1]], m.pos[tri[2]]) - p).squaredNorm() <= far2) {
+        if (e.group != own && squared_distance_within(m, ball, e.face, p, far) <= far2) {
           flat[v] = 0;
           break;
         }
@@ -238,8 +239,7 @@ std::vector<char> plainly_flat(const MeshArrays& m, const std::vector<Eigen::Vec
 
 std::vector<char> plainly_flat(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, double radius,
                                const VotingThresholds& t) {
-  std::vector<int> order;
-  return plainly_flat(m, normals, face_balls(m), radius, t, order);
+  return plainly_flat(m, normals, face_balls(m), radius, t, vertex_order(m));
 }
 
 std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, double radius,
@@ -263,9 +263,10 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
   };
   // Per face its centroid and the radius of the ball about it holding the triangle, side by
   // side: the test that rejects most queued faces then reads one cache line, not two arrays.
-  const std::vector<Eigen::Vector4d> ball = face_balls(m);
+  std::vector<Eigen::Vector4d> ball;
+  std::vector<int> order;  // (a walk over every face on one core, beside the balls on all)
+  tbb::parallel_invoke([&] { ball = face_balls(m); }, [&] { order = vertex_order(m); });
   // Vertices amid a plane (most of a CAD part's) are face vertices whatever the exact weights.
-  std::vector<int> order;  // vertex_order(m)
   const std::vector<char> flat = plainly_flat(m, normals, ball, radius, t, order);
   tbb::enumerable_thread_specific<Scratch> scratch(
       [nf, nv] { return Scratch{std::vector<int>(nf, -1), std::vector<int>(nv, -1), {}, {}, {}}; });
@@ -297,14 +298,9 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
         const bool incident = q < incident_faces;
         double d = 0.0;
         if (!incident) {
-          // The triangle lies in the ball of radius ball[f][3] about its centroid: most faces of
-          // the search's outer ring are out of reach by that bound alone, without the closest
-          // point. Compared squared, with a margin that keeps every face within reach: no square
-          // root on the path of every queued face.
-          const double beyond = (ball[f][3] + far) * (1.0 + 1e-9);
-          if ((ball[f].head<3>() - p).squaredNorm() > beyond * beyond) continue;
-          const auto& tri = m.tri[f];
-          const double d2 = (closest_point_on_triangle(p, m.pos[tri[0]], m.pos[tri[1]], m.pos[tri[2]]) - p).squaredNorm();
+          // Most faces of the search's outer ring are out of reach by their ball alone, without
+          // the closest point.
+          const double d2 = squared_distance_within(m, ball, f, p, far);
           if (d2 > far2) continue;  // certainly beyond the radius: no square root either
           d = std::sqrt(d2);
           if (d > radius) continue;
