@@ -1,0 +1,77 @@
+// PCL's Poisson alone, on a fused cloud written by `scan2cad reconstruct --cloud-out`, with the
+// reconstruct stage's settings, on one or more threads: how long it takes and whether its runs
+// give the same mesh (issue 3: why the Poisson default cannot reach the speed target, bench/README.md).
+// Usage: s2c-bench-poisson CLOUD.ply [--depth 8] [--threads 1] [--repeat 3]
+// Prints one line per run (seconds, faces, FNV-1a hash of the vertices and triangles) and whether
+// all runs agree.
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <set>
+#include <string>
+
+#include <pcl/io/ply_io.h>
+#include <pcl/point_types.h>
+#include <pcl/surface/poisson.h>
+
+namespace {
+
+std::uint64_t fnv1a(const void* data, std::size_t n, std::uint64_t h) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
+  return h;
+}
+
+std::uint64_t mesh_hash(const pcl::PolygonMesh& pm) {
+  std::uint64_t h = 14695981039346656037ull;
+  h = fnv1a(pm.cloud.data.data(), pm.cloud.data.size(), h);
+  for (const auto& poly : pm.polygons) h = fnv1a(poly.vertices.data(), poly.vertices.size() * sizeof(poly.vertices[0]), h);
+  return h;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || std::string(argv[1]) == "--help") {
+    std::fprintf(stderr, "usage: s2c-bench-poisson CLOUD.ply [--depth 8] [--threads 1] [--repeat 3]\n");
+    return argc < 2 ? 2 : 0;
+  }
+  int depth = 8, threads = 1, repeat = 3;
+  for (int i = 2; i + 1 < argc; i += 2) {
+    const std::string key = argv[i];
+    const int value = std::stoi(argv[i + 1]);
+    if (key == "--depth") depth = value;
+    else if (key == "--threads") threads = value;
+    else if (key == "--repeat") repeat = value;
+    else {
+      std::fprintf(stderr, "unknown option %s\n", key.c_str());
+      return 2;
+    }
+  }
+  auto cloud = std::make_shared<pcl::PointCloud<pcl::PointNormal>>();
+  if (pcl::io::loadPLYFile(argv[1], *cloud) < 0 || cloud->empty()) {
+    std::fprintf(stderr, "%s: cannot read a cloud with normals\n", argv[1]);
+    return 2;
+  }
+  std::set<std::uint64_t> hashes;
+  for (int r = 0; r < repeat; ++r) {
+    // The reconstruct stage's settings (reconstruct/src/reconstruct.cpp, mesh_cloud), threads aside.
+    pcl::Poisson<pcl::PointNormal> poisson;
+    poisson.setDepth(depth);
+    poisson.setInputCloud(cloud);
+    poisson.setSamplesPerNode(1.5f);
+    poisson.setThreads(threads);
+    poisson.setSolverDivide(std::min(depth, 6));
+    poisson.setIsoDivide(std::min(depth, 6));
+    pcl::PolygonMesh pm;
+    const auto t0 = std::chrono::steady_clock::now();
+    poisson.reconstruct(pm);
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const std::uint64_t h = mesh_hash(pm);
+    hashes.insert(h);
+    std::printf("run %d: %zu points, depth %d, %d thread(s): %.2f s, %zu faces, hash %016llx\n", r + 1, cloud->size(),
+                depth, threads, s, pm.polygons.size(), static_cast<unsigned long long>(h));
+  }
+  std::printf("%zu distinct mesh(es) in %d runs\n", hashes.size(), repeat);
+  return 0;
+}
