@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <set>
 #include <string>
 
@@ -37,16 +38,17 @@ int main(int argc, char** argv) {
     return argc < 2 ? 2 : 0;
   }
   int depth = 8, threads = 1, repeat = 3;
-  for (int i = 2; i + 1 < argc; i += 2) {
+  for (int i = 2; i < argc; i += 2) {
     const std::string key = argv[i];
-    const int value = std::stoi(argv[i + 1]);
-    if (key == "--depth") depth = value;
-    else if (key == "--threads") threads = value;
-    else if (key == "--repeat") repeat = value;
-    else {
-      std::fprintf(stderr, "unknown option %s\n", key.c_str());
+    int* target = key == "--depth" ? &depth : key == "--threads" ? &threads : key == "--repeat" ? &repeat : nullptr;
+    char* end = nullptr;
+    const long value = i + 1 < argc ? std::strtol(argv[i + 1], &end, 10) : 0;
+    if (!target || i + 1 >= argc || *end != '\0' || value < 1 || value > 64) {
+      std::fprintf(stderr, "s2c-bench-poisson: %s needs a whole number from 1 to 64 (options: --depth --threads --repeat)\n",
+                   key.c_str());
       return 2;
     }
+    *target = static_cast<int>(value);
   }
   auto cloud = std::make_shared<pcl::PointCloud<pcl::PointNormal>>();
   if (pcl::io::loadPLYFile(argv[1], *cloud) < 0 || cloud->empty()) {
