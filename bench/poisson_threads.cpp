@@ -1,7 +1,8 @@
 // PCL's Poisson alone, on a fused cloud written by `scan2cad reconstruct --cloud-out`, with the
 // reconstruct stage's settings, on one or more threads: how long it takes and whether its runs
 // give the same mesh (issue 3: why the Poisson default cannot reach the speed target, bench/README.md).
-// Usage: s2c-bench-poisson CLOUD.ply [--depth 8] [--threads 1] [--repeat 3]
+// Usage: s2c-bench-poisson CLOUD.ply [--depth 8] [--threads 1] [--repeat 3] [--every 1]
+// (--every N: every Nth point only, to see how the time depends on the number of points.)
 // Prints one line per run (seconds, faces, FNV-1a hash of the vertices and triangles) and whether
 // all runs agree.
 #include <chrono>
@@ -34,17 +35,21 @@ std::uint64_t mesh_hash(const pcl::PolygonMesh& pm) {
 
 int main(int argc, char** argv) {
   if (argc < 2 || std::string(argv[1]) == "--help") {
-    std::fprintf(stderr, "usage: s2c-bench-poisson CLOUD.ply [--depth 8] [--threads 1] [--repeat 3]\n");
+    std::fprintf(stderr, "usage: s2c-bench-poisson CLOUD.ply [--depth 8] [--threads 1] [--repeat 3] [--every 1]\n");
     return argc < 2 ? 2 : 0;
   }
-  int depth = 8, threads = 1, repeat = 3;
+  int depth = 8, threads = 1, repeat = 3, every = 1;
   for (int i = 2; i < argc; i += 2) {
     const std::string key = argv[i];
-    int* target = key == "--depth" ? &depth : key == "--threads" ? &threads : key == "--repeat" ? &repeat : nullptr;
+    int* target = key == "--depth"     ? &depth
+                  : key == "--threads" ? &threads
+                  : key == "--repeat"  ? &repeat
+                  : key == "--every"   ? &every
+                                       : nullptr;
     char* end = nullptr;
     const long value = i + 1 < argc ? std::strtol(argv[i + 1], &end, 10) : 0;
     if (!target || i + 1 >= argc || *end != '\0' || value < 1 || value > 64) {
-      std::fprintf(stderr, "s2c-bench-poisson: %s needs a whole number from 1 to 64 (options: --depth --threads --repeat)\n",
+      std::fprintf(stderr, "s2c-bench-poisson: %s needs a whole number from 1 to 64 (options: --depth --threads --repeat --every)\n",
                    key.c_str());
       return 2;
     }
@@ -54,6 +59,11 @@ int main(int argc, char** argv) {
   if (pcl::io::loadPLYFile(argv[1], *cloud) < 0 || cloud->empty()) {
     std::fprintf(stderr, "%s: cannot read a cloud with normals\n", argv[1]);
     return 2;
+  }
+  if (every > 1) {
+    auto thinned = std::make_shared<pcl::PointCloud<pcl::PointNormal>>();
+    for (std::size_t i = 0; i < cloud->size(); i += static_cast<std::size_t>(every)) thinned->push_back((*cloud)[i]);
+    cloud = thinned;
   }
   std::set<std::uint64_t> hashes;
   for (int r = 0; r < repeat; ++r) {
