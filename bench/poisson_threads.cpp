@@ -1,8 +1,9 @@
 // PCL's Poisson alone, on a fused cloud written by `scan2cad reconstruct --cloud-out`, with the
 // reconstruct stage's settings, on one or more threads: how long it takes and whether its runs
 // give the same mesh (issue 3: why the Poisson default cannot reach the speed target, bench/README.md).
-// Usage: s2c-bench-poisson CLOUD.ply [--depth 8] [--threads 1] [--repeat 3] [--every 1]
-// (--every N: every Nth point only, to see how the time depends on the number of points.)
+// Usage: s2c-bench-poisson CLOUD.ply [--depth 8] [--threads 1] [--repeat 3] [--every 1] [--solver-divide 6] [--iso-divide 6]
+// (--every N: every Nth point only, to see how the time depends on the number of points; the
+// divides: the octree depth of the blocks PCL solves and extracts in, min(depth, 6) as the stage.)
 // Prints one line per run (seconds, faces, FNV-1a hash of the vertices and triangles) and whether
 // all runs agree.
 #include <chrono>
@@ -35,21 +36,24 @@ std::uint64_t mesh_hash(const pcl::PolygonMesh& pm) {
 
 int main(int argc, char** argv) {
   if (argc < 2 || std::string(argv[1]) == "--help") {
-    std::fprintf(stderr, "usage: s2c-bench-poisson CLOUD.ply [--depth 8] [--threads 1] [--repeat 3] [--every 1]\n");
+    std::fprintf(stderr, "usage: s2c-bench-poisson CLOUD.ply [--depth 8] [--threads 1] [--repeat 3] [--every 1] "
+                         "[--solver-divide 6] [--iso-divide 6]\n");
     return argc < 2 ? 2 : 0;
   }
-  int depth = 8, threads = 1, repeat = 3, every = 1;
+  int depth = 8, threads = 1, repeat = 3, every = 1, solver_divide = 0, iso_divide = 0;
   for (int i = 2; i < argc; i += 2) {
     const std::string key = argv[i];
     int* target = key == "--depth"     ? &depth
                   : key == "--threads" ? &threads
                   : key == "--repeat"  ? &repeat
                   : key == "--every"   ? &every
+                  : key == "--solver-divide" ? &solver_divide
+                  : key == "--iso-divide"    ? &iso_divide
                                        : nullptr;
     char* end = nullptr;
     const long value = i + 1 < argc ? std::strtol(argv[i + 1], &end, 10) : 0;
     if (!target || i + 1 >= argc || *end != '\0' || value < 1 || value > 64) {
-      std::fprintf(stderr, "s2c-bench-poisson: %s needs a whole number from 1 to 64 (options: --depth --threads --repeat --every)\n",
+      std::fprintf(stderr, "s2c-bench-poisson: %s needs a whole number from 1 to 64 (options: --depth --threads --repeat --every --solver-divide --iso-divide)\n",
                    key.c_str());
       return 2;
     }
@@ -73,16 +77,17 @@ int main(int argc, char** argv) {
     poisson.setInputCloud(cloud);
     poisson.setSamplesPerNode(1.5f);
     poisson.setThreads(threads);
-    poisson.setSolverDivide(std::min(depth, 6));
-    poisson.setIsoDivide(std::min(depth, 6));
+    poisson.setSolverDivide(solver_divide > 0 ? solver_divide : std::min(depth, 6));
+    poisson.setIsoDivide(iso_divide > 0 ? iso_divide : std::min(depth, 6));
     pcl::PolygonMesh pm;
     const auto t0 = std::chrono::steady_clock::now();
     poisson.reconstruct(pm);
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const std::uint64_t h = mesh_hash(pm);
     hashes.insert(h);
-    std::printf("run %d: %zu points, depth %d, %d thread(s): %.2f s, %zu faces, hash %016llx\n", r + 1, cloud->size(),
-                depth, threads, s, pm.polygons.size(), static_cast<unsigned long long>(h));
+    std::printf("run %d: %zu points, depth %d, blocks %d/%d, %d thread(s): %.2f s, %zu faces, hash %016llx\n", r + 1,
+                cloud->size(), depth, poisson.getSolverDivide(), poisson.getIsoDivide(), threads, s, pm.polygons.size(),
+                static_cast<unsigned long long>(h));
   }
   std::printf("%zu distinct mesh(es) in %d runs\n", hashes.size(), repeat);
   return 0;
