@@ -3,7 +3,7 @@
 // give the same mesh (issue 3: why the Poisson default cannot reach the speed target, bench/README.md).
 // Usage: s2c-bench-poisson CLOUD.ply [--depth 8] [--threads 1] [--repeat 3] [--every 1] [--solver-divide 6] [--iso-divide 6]
 // (--every N: every Nth point only, to see how the time depends on the number of points; the
-// divides: the octree depth of the blocks PCL solves and extracts in, min(depth, 6) as the stage.)
+// divides: the octree depth of the blocks PCL solves and extracts in, the stage's by default.)
 // Prints one line per run (seconds, faces, FNV-1a hash of the vertices and triangles) and whether
 // all runs agree.
 #include <chrono>
@@ -12,10 +12,13 @@
 #include <cstdlib>
 #include <set>
 #include <string>
+#include <utility>
 
 #include <pcl/io/ply_io.h>
 #include <pcl/point_types.h>
 #include <pcl/surface/poisson.h>
+
+#include "s2c/reconstruct/reconstruct.h"
 
 namespace {
 
@@ -41,19 +44,19 @@ int main(int argc, char** argv) {
     return argc < 2 ? 2 : 0;
   }
   int depth = 8, threads = 1, repeat = 3, every = 1, solver_divide = 0, iso_divide = 0;
+  const std::pair<const char*, int*> options[] = {{"--depth", &depth},   {"--threads", &threads},
+                                                   {"--repeat", &repeat}, {"--every", &every},
+                                                   {"--solver-divide", &solver_divide}, {"--iso-divide", &iso_divide}};
   for (int i = 2; i < argc; i += 2) {
     const std::string key = argv[i];
-    int* target = key == "--depth"     ? &depth
-                  : key == "--threads" ? &threads
-                  : key == "--repeat"  ? &repeat
-                  : key == "--every"   ? &every
-                  : key == "--solver-divide" ? &solver_divide
-                  : key == "--iso-divide"    ? &iso_divide
-                                       : nullptr;
+    int* target = nullptr;
+    for (const auto& [name, slot] : options)
+      if (key == name) target = slot;
     char* end = nullptr;
     const long value = i + 1 < argc ? std::strtol(argv[i + 1], &end, 10) : 0;
     if (!target || i + 1 >= argc || *end != '\0' || value < 1 || value > 64) {
-      std::fprintf(stderr, "s2c-bench-poisson: %s needs a whole number from 1 to 64 (options: --depth --threads --repeat --every --solver-divide --iso-divide)\n",
+      std::fprintf(stderr, "s2c-bench-poisson: %s needs a whole number from 1 to 64 (options: --depth --threads --repeat "
+                           "--every --solver-divide --iso-divide)\n",
                    key.c_str());
       return 2;
     }
@@ -71,14 +74,14 @@ int main(int argc, char** argv) {
   }
   std::set<std::uint64_t> hashes;
   for (int r = 0; r < repeat; ++r) {
-    // The reconstruct stage's settings (reconstruct/src/reconstruct.cpp, mesh_cloud), threads aside.
+    // The reconstruct stage's settings (s2c/reconstruct/reconstruct.h), threads aside.
     pcl::Poisson<pcl::PointNormal> poisson;
     poisson.setDepth(depth);
     poisson.setInputCloud(cloud);
-    poisson.setSamplesPerNode(1.5f);
+    poisson.setSamplesPerNode(s2c::kPoissonSamplesPerNode);
     poisson.setThreads(threads);
-    poisson.setSolverDivide(solver_divide > 0 ? solver_divide : std::min(depth, 6));
-    poisson.setIsoDivide(iso_divide > 0 ? iso_divide : std::min(depth, 6));
+    poisson.setSolverDivide(solver_divide > 0 ? solver_divide : s2c::poisson_block_depth(depth));
+    poisson.setIsoDivide(iso_divide > 0 ? iso_divide : s2c::poisson_block_depth(depth));
     pcl::PolygonMesh pm;
     const auto t0 = std::chrono::steady_clock::now();
     poisson.reconstruct(pm);

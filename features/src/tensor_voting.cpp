@@ -133,7 +133,7 @@ std::vector<char> plainly_flat(const MeshArrays& m, const std::vector<Eigen::Vec
     bool one = begin < end && m.pos[v].allFinite();
     for (int k = begin; one && k < end; ++k) {
       const int f = m.vf[k];
-      one = group[f] == group[m.vf[begin]] && normals[f].squaredNorm() > 0;
+      one = group[f] >= 0 && group[f] == group[m.vf[begin]];
     }
     flat[v] = one;
   });

@@ -380,7 +380,7 @@ Mesh mesh_cloud(const OrientedCloud& in, const ReconstructOptions& o, Reconstruc
     pcl::Poisson<pcl::PointNormal> poisson;
     poisson.setDepth(rep.poisson_depth);
     poisson.setInputCloud(cloud);
-    poisson.setSamplesPerNode(1.5f);
+    poisson.setSamplesPerNode(kPoissonSamplesPerNode);
     // One thread: PCL's Poisson sums in a thread-dependent order, so two threads give a different
     // mesh on every run (a re-run after a crash must reproduce its outputs), though they would
     // save 1.5-2 s on the plate scan.
@@ -389,7 +389,7 @@ Mesh mesh_cloud(const OrientedCloud& in, const ReconstructOptions& o, Reconstruc
     // depth: the depth-8 Laplacian alone was 283 MB of the plate scan's 507 MB heap peak; in
     // blocks the peak is 245 MB with the same accuracy (mean distance to the part 0.0108 mm),
     // for 1.2 s more (mesh step 5.1 -> 6.3 s).
-    rep.poisson_block_depth = std::min(rep.poisson_depth, 6);
+    rep.poisson_block_depth = poisson_block_depth(rep.poisson_depth);
     poisson.setSolverDivide(rep.poisson_block_depth);
     poisson.setIsoDivide(rep.poisson_block_depth);
     QuietStdio quiet(spdlog::get_level() > spdlog::level::debug);

@@ -1,6 +1,7 @@
 #pragma once
 /// \file From a recorded scan (stream directory) or a point cloud to a fused cloud and a mesh.
 /// PCL does the work inside reconstruct/src; this header stays light.
+#include <algorithm>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -12,6 +13,12 @@
 namespace s2c {
 
 enum class MeshMethod { poisson, gp3, organized, imls };
+
+/// PCL's Poisson as the stage runs it, beyond the depth (s2c-bench-poisson runs the same):
+/// samples per octree node, and the octree depth of the blocks it solves and extracts in
+/// (reconstruct.cpp, mesh_cloud: why blocks).
+constexpr float kPoissonSamplesPerNode = 1.5f;
+inline int poisson_block_depth(int depth) { return std::min(depth, 6); }
 
 struct ReconstructOptions {
   InputOptions input;
