@@ -10,6 +10,12 @@
 #include "s2c/core/report.h"
 #include "s2c/features/analyze.h"
 
+namespace {
+
+constexpr std::size_t kHeapPerFace = 175;
+
+}  // namespace
+
 int main(int argc, char** argv) {
   s2c::reuse_freed_memory();
   CLI::App app{
@@ -65,17 +71,24 @@ int main(int argc, char** argv) {
                            {"min_angle_deg", o.min_crease_deg}, {"radius_mm", o.radius},
                            {"noise_mm", o.noise},     {"fit_tolerance_mm", o.fit_tolerance},
                            {"angle_tolerance_deg", o.constraint.angle_tol_deg}, {"constraints", o.constraints}};
-    s2c::Mesh mesh;
+    // The analysis takes over the indexed faces as they are read; a half-edge mesh is only built
+    // for the segments PLY (read_mesh's, so its vertices are those the analysis numbered).
+    s2c::TriangleSoup soup;
     std::string hash;
     {
       s2c::Report::Step t(report, "read");
-      s2c::read_mesh(input, mesh);
+      // The analysis takes about 175 bytes of heap per face (a million vertices: 340 MB) that it
+      // would fault in page by page; the idle core does it while this one parses the file.
+      s2c::HeapWarmer warm(kHeapPerFace * s2c::estimated_faces(input));
+      soup = s2c::read_soup(input);
       hash = s2c::sha256_file(input);
     }
+    s2c::Mesh mesh;
+    if (!segments.empty()) s2c::soup_to_mesh(soup, mesh);
     s2c::features::Analysis analysis;
     {
       s2c::Report::Step t(report, "analyse");
-      analysis = s2c::features::analyze(mesh, o, &report.counts());
+      analysis = s2c::features::analyze(std::move(soup), o, &report.counts());
     }
     analysis.features.mesh_sha256 = hash;
     {

@@ -1,6 +1,12 @@
 #include "s2c/core/memory.h"
 
 #include <malloc.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdlib>
 
 namespace s2c {
 
@@ -9,6 +15,32 @@ void reuse_freed_memory() {
   // free top is kept: both are then handed out again, already faulted in.
   mallopt(M_MMAP_MAX, 0);
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
+}
+
+HeapWarmer::HeapWarmer(std::size_t bytes) {
+  // Taken on this thread, so from the main heap, where the arrays the caller allocates next come
+  // from; only the faulting happens on the other.
+  // Never more than half the memory now free: warming must not push anything out.
+  const long free_pages = sysconf(_SC_AVPHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  if (free_pages > 0 && page > 0) bytes = std::min(bytes, static_cast<std::size_t>(free_pages) * page / 2);
+  block_ = bytes > 0 ? static_cast<char*>(std::malloc(bytes)) : nullptr;
+  if (!block_) return;
+  toucher_ = std::thread([block = block_, bytes] {
+    constexpr std::uintptr_t kPage = 4096;
+    const std::uintptr_t begin = reinterpret_cast<std::uintptr_t>(block);
+    const std::uintptr_t first = (begin + kPage - 1) / kPage * kPage, last = (begin + bytes) / kPage * kPage;
+    // One call maps all the pages without a fault each (Linux ≥ 5.14; where it fails the writes
+    // below fault them as usual). Measured here on 512 MB: 1.55 s of page-by-page first writes,
+    // against 0.1 s for the call and 0.7 s for the writes after it, which the hypervisor still
+    // sees for the first time.
+    if (last > first) madvise(reinterpret_cast<void*>(first), last - first, MADV_POPULATE_WRITE);
+    for (std::size_t i = 0; i < bytes; i += kPage) block[i] = 0;
+  });
+}
+
+HeapWarmer::~HeapWarmer() {
+  if (toucher_.joinable()) toucher_.join();
+  std::free(block_);
 }
 
 }  // namespace s2c

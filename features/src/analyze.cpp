@@ -107,17 +107,15 @@ std::vector<VertexTensor> vote_tensors(const Mesh& mesh, double radius, double m
   return vote(m, m.fnormal, radius, voting_thresholds(min_crease_deg, noise, m.median_edge));
 }
 
-Analysis analyze(const Mesh& mesh, const FeatureOptions& o, nlohmann::json* report) {
-  if (mesh.n_faces() == 0) throw InvalidInput("the mesh has no faces: nothing to analyse");
+namespace {
+
+/// The analysis of the arrays; `timings` already holds the time taken to build them.
+Analysis analyze_arrays(const MeshArrays& m, const FeatureOptions& o, nlohmann::json timings, nlohmann::json* report) {
   Analysis out;
-  nlohmann::json timings = nlohmann::json::object();
   auto t = Clock::now();
-  const MeshArrays m = build_arrays(mesh);
-  timings["arrays"] = seconds_since(t);
   const double diag = std::max(m.box.diagonal(), 1e-9);
   const double edge = m.median_edge > 0 ? m.median_edge : diag * 1e-3;
 
-  t = Clock::now();
   out.noise = o.noise >= 0 ? o.noise : measure_noise(m);
   const bool noisy = out.noise > kCleanNoise * edge;
   // Noise needs a wider vote and smoothed normals; a clean tessellation keeps its exact normals,
@@ -238,6 +236,25 @@ Analysis analyze(const Mesh& mesh, const FeatureOptions& o, nlohmann::json* repo
                std::count_if(f.patches.begin(), f.patches.end(),
                              [](const Patch& p) { return p.shape.type == ShapeType::freeform; }),
                f.lines.size(), constraints, out.noise, noisy ? "noisy: normals filtered" : "clean tessellation");
+  return out;
+}
+
+}  // namespace
+
+Analysis analyze(const Mesh& mesh, const FeatureOptions& o, nlohmann::json* report) {
+  if (mesh.n_faces() == 0) throw InvalidInput("the mesh has no faces: nothing to analyse");
+  const auto t = Clock::now();
+  const MeshArrays m = build_arrays(mesh);
+  return analyze_arrays(m, o, {{"arrays", seconds_since(t)}}, report);
+}
+
+Analysis analyze(TriangleSoup&& soup, const FeatureOptions& o, nlohmann::json* report) {
+  if (soup.faces.empty()) throw InvalidInput("the mesh has no faces: nothing to analyse");
+  const auto t = Clock::now();
+  bool through_mesh = false;
+  const MeshArrays m = build_arrays(std::move(soup), &through_mesh);
+  Analysis out = analyze_arrays(m, o, {{"arrays", seconds_since(t)}}, report);
+  if (report) (*report)["half_edge_mesh_built"] = through_mesh;
   return out;
 }
 

@@ -1,6 +1,7 @@
 #include "mesh_arrays.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 #include <Eigen/Dense>
@@ -58,18 +59,11 @@ double quadric_residual(const std::vector<Eigen::Vector3d>& points) {
 
 }  // namespace
 
-MeshArrays build_arrays(const Mesh& mesh) {
-  MeshArrays m;
-  const int nv = static_cast<int>(mesh.n_vertices()), nf = static_cast<int>(mesh.n_faces());
-  // Every step but the prefix sums runs over vertices, faces or edges in parallel (OpenMesh is
-  // only read); ids and order are those of the sequential walk.
-  m.pos.resize(nv);
-  tbb::parallel_for(0, nv, [&](int v) { m.pos[v] = to_eigen(mesh.point(Mesh::VertexHandle(v))); });
-  m.tri.resize(nf);
-  tbb::parallel_for(0, nf, [&](int f) {
-    int k = 0;
-    for (auto fv : mesh.fv_range(Mesh::FaceHandle(f))) m.tri[f][k++] = fv.idx();
-  });
+namespace {
+
+/// Face normals, areas and centroids from pos and tri, and the vertex→face incidence (CSR).
+void add_faces(MeshArrays& m) {
+  const int nv = m.vertices(), nf = m.faces();
   m.fnormal.resize(nf);
   m.centroid.resize(nf);
   m.farea.resize(nf);
@@ -89,6 +83,91 @@ MeshArrays build_arrays(const Mesh& mesh) {
   std::vector<int> fill(m.vf_start.begin(), m.vf_start.end() - 1);
   for (int f = 0; f < nf; ++f)
     for (int v : m.tri[f]) m.vf[fill[v]++] = f;
+}
+
+/// Mean and median edge length, and the bounding box of all vertices (isolated ones included).
+void add_sizes(MeshArrays& m) {
+  std::vector<double> lengths(m.edges.size());
+  tbb::parallel_for(0, static_cast<int>(m.edges.size()),
+                    [&](int e) { lengths[e] = (m.pos[m.edges[e].v0] - m.pos[m.edges[e].v1]).norm(); });
+  if (!lengths.empty()) {
+    double sum = 0;
+    for (double l : lengths) sum += l;
+    m.mean_edge = sum / lengths.size();
+    std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+    m.median_edge = lengths[lengths.size() / 2];
+  }
+  for (int v = 0; v < m.vertices(); ++v) {
+    if (v == 0) m.box.min = m.box.max = m.pos[0];
+    m.box.min = m.box.min.cwiseMin(m.pos[v]);
+    m.box.max = m.box.max.cwiseMax(m.pos[v]);
+  }
+}
+
+/// The position of vertex v in face f (-1 if absent).
+int corner_of(const MeshArrays& m, int f, int v) {
+  const auto& t = m.tri[f];
+  return t[0] == v ? 0 : t[1] == v ? 1 : t[2] == v ? 2 : -1;
+}
+
+constexpr int kNoFace = -1, kBadEdge = -2;
+
+/// The face across side i (t[i] → t[i+1]) of face f, found through the faces of t[i]: kNoFace on
+/// a boundary, kBadEdge where the side is not a manifold edge with the faces oriented alike (a
+/// third face on it, or a neighbour running it in the same direction).
+int face_across_side(const MeshArrays& m, int f, int i) {
+  const int a = m.tri[f][i], b = m.tri[f][(i + 1) % 3];
+  int across = kNoFace;
+  for (int j = m.vf_start[a]; j < m.vf_start[a + 1]; ++j) {
+    const int g = m.vf[j];
+    if (g == f) continue;
+    const int ca = corner_of(m, g, a);
+    const auto& t = m.tri[g];
+    if (t[(ca + 1) % 3] == b) return kBadEdge;  // a → b again: flipped neighbour or duplicate face
+    if (t[(ca + 2) % 3] != b) continue;
+    if (across != kNoFace) return kBadEdge;     // a third face on the edge
+    across = g;
+  }
+  return across;
+}
+
+/// Whether the faces of vertex v form one fan (a disk, or a half-disk at a boundary): walking from
+/// one face across the sides at v reaches all of them. Needs the edges.
+bool one_fan(const MeshArrays& m, int v) {
+  const int count = m.vf_start[v + 1] - m.vf_start[v];
+  if (count == 0) return true;
+  const int start = m.vf[m.vf_start[v]];
+  int reached = 1;
+  // Forward across the side leaving v, then (if that stops at a boundary) backward across the
+  // side entering v; orientations agree, so each step lands on the neighbour's other side at v.
+  for (int step : {0, 2}) {
+    int f = start;
+    while (reached <= count) {
+      const int g = m.across(m.face_edges[f][(corner_of(m, f, v) + step) % 3], f);
+      if (g < 0) break;
+      if (g == start) return reached == count;
+      f = g;
+      ++reached;
+    }
+  }
+  return reached == count;
+}
+
+}  // namespace
+
+MeshArrays build_arrays(const Mesh& mesh) {
+  MeshArrays m;
+  const int nv = static_cast<int>(mesh.n_vertices()), nf = static_cast<int>(mesh.n_faces());
+  // Every step but the prefix sums runs over vertices, faces or edges in parallel (OpenMesh is
+  // only read); ids and order are those of the sequential walk.
+  m.pos.resize(nv);
+  tbb::parallel_for(0, nv, [&](int v) { m.pos[v] = to_eigen(mesh.point(Mesh::VertexHandle(v))); });
+  m.tri.resize(nf);
+  tbb::parallel_for(0, nf, [&](int f) {
+    int k = 0;
+    for (auto fv : mesh.fv_range(Mesh::FaceHandle(f))) m.tri[f][k++] = fv.idx();
+  });
+  add_faces(m);
 
   // Edges with at least one face, numbered in OpenMesh's order (isolated edges skipped).
   const int ne_all = static_cast<int>(mesh.n_edges());
@@ -102,7 +181,6 @@ MeshArrays build_arrays(const Mesh& mesh) {
   const int ne = id[ne_all];
   m.edges.resize(ne);
   m.face_edges.assign(nf, {-1, -1, -1});
-  std::vector<double> lengths(ne);
   tbb::parallel_for(0, ne_all, [&](int e) {
     if (id[e + 1] == id[e]) return;  // an isolated edge without faces
     const Mesh::EdgeHandle eh(e);
@@ -112,7 +190,6 @@ MeshArrays build_arrays(const Mesh& mesh) {
     if (f0 < 0) std::swap(f0, f1);
     const int k = id[e];
     m.edges[k] = {std::min(a, b), std::max(a, b), f0, f1};
-    lengths[k] = (m.pos[a] - m.pos[b]).norm();
     // Each edge writes its own slot of its faces' edge triples.
     for (int f : {f0, f1}) {
       if (f < 0) continue;
@@ -122,15 +199,86 @@ MeshArrays build_arrays(const Mesh& mesh) {
       }
     }
   });
-  if (!lengths.empty()) {
-    double sum = 0;
-    for (double l : lengths) sum += l;
-    m.mean_edge = sum / lengths.size();
-    std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
-    m.median_edge = lengths[lengths.size() / 2];
-  }
-  m.box = bounds(mesh);
+  add_sizes(m);
   return m;
+}
+
+namespace {
+
+/// Completes arrays holding pos and tri only, with the edges numbered as OpenMesh numbers them
+/// (an edge when its first face is added, sides in order), if the faces form a manifold surface
+/// oriented alike; false otherwise.
+bool add_manifold_edges(MeshArrays& m) {
+  const int nv = m.vertices(), nf = m.faces();
+  for (const auto& t : m.tri)
+    for (int k = 0; k < 3; ++k)
+      if (t[k] < 0 || t[k] >= nv || t[k] == t[(k + 1) % 3]) return false;
+  add_faces(m);
+  // The side (f, i) starts a new edge unless the face across it comes earlier.
+  std::vector<std::array<int, 3>> across(nf);
+  std::vector<int> first_edge(nf + 1, 0);
+  std::atomic<bool> manifold{true};
+  tbb::parallel_for(0, nf, [&](int f) {
+    int fresh = 0;
+    for (int i = 0; i < 3; ++i) {
+      across[f][i] = face_across_side(m, f, i);
+      if (across[f][i] == kBadEdge) manifold = false;
+      fresh += !(across[f][i] >= 0 && across[f][i] < f);
+    }
+    first_edge[f + 1] = fresh;
+  });
+  if (!manifold) return false;
+  for (int f = 0; f < nf; ++f) first_edge[f + 1] += first_edge[f];
+  m.edges.resize(first_edge[nf]);
+  m.face_edges.resize(nf);
+  tbb::parallel_for(0, nf, [&](int f) {
+    int k = first_edge[f];
+    for (int i = 0; i < 3; ++i) {
+      const int g = across[f][i];
+      if (g >= 0 && g < f) continue;
+      const int a = m.tri[f][i], b = m.tri[f][(i + 1) % 3];
+      m.edges[k] = {std::min(a, b), std::max(a, b), f, g};
+      m.face_edges[f][i] = k++;
+    }
+  });
+  tbb::parallel_for(0, nf, [&](int f) {
+    for (int i = 0; i < 3; ++i) {
+      const int g = across[f][i];
+      if (g < 0 || g > f) continue;
+      // The side of g that runs the other way: its end is this side's start.
+      m.face_edges[f][i] = m.face_edges[g][(corner_of(m, g, m.tri[f][i]) + 2) % 3];
+    }
+  });
+  std::atomic<bool> fans{true};
+  tbb::parallel_for(0, nv, [&](int v) {
+    if (!one_fan(m, v)) fans = false;
+  });
+  return fans;
+}
+
+}  // namespace
+
+MeshArrays build_arrays(TriangleSoup&& soup, bool* through_mesh) {
+  MeshArrays m;
+  m.pos = std::move(soup.vertices);
+  m.tri = std::move(soup.faces);
+  soup = TriangleSoup{};  // its normals too: the memory is handed out again below
+  const bool manifold = add_manifold_edges(m);
+  if (through_mesh) *through_mesh = !manifold;
+  if (manifold) {
+    add_sizes(m);
+    return m;
+  }
+  // Complex edges or vertices: OpenMesh gives the faces it cannot attach copies of their
+  // vertices, and the analysis sees the mesh as it does everywhere else.
+  TriangleSoup faces;
+  faces.vertices = std::move(m.pos);
+  faces.faces = std::move(m.tri);
+  m = MeshArrays{};
+  Mesh mesh;
+  soup_to_mesh(faces, mesh);
+  faces = TriangleSoup{};
+  return build_arrays(mesh);
 }
 
 double measure_noise(const MeshArrays& m) {

@@ -35,6 +35,15 @@ struct MeshArrays {
 /// Builds the arrays of a (manifold, as OpenMesh holds it) mesh. Deleted elements are not expected.
 MeshArrays build_arrays(const Mesh& mesh);
 
+/// The same arrays from an indexed triangle list, which they take over (its normals are freed).
+/// When the list is a manifold surface with its faces oriented alike (every edge on one or two
+/// faces running it in opposite directions, every vertex's faces one fan, no repeated corner),
+/// no half-edge mesh is built: the edges are numbered as OpenMesh numbers them. Otherwise the
+/// list goes through soup_to_mesh, which gives faces at complex edges or vertices copies of their
+/// vertices, and `*through_mesh` is set. Either way the arrays equal
+/// build_arrays(soup_to_mesh(soup)).
+MeshArrays build_arrays(TriangleSoup&& soup, bool* through_mesh = nullptr);
+
 /// Robust normal noise σ (mm): over interior edges, the offset of one face's far vertex from the
 /// other face's plane; its lower quartile, scaled to a standard deviation, leaves creases out.
 double measure_noise(const MeshArrays& m);

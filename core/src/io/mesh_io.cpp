@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <fstream>
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <fmt/format.h>
@@ -56,6 +57,29 @@ MeshFormat mesh_format(const fs::path& path) {
   if (ext == ".off") return MeshFormat::off;
   if (ext == ".vtk") return MeshFormat::vtk;
   throw InvalidInput(fmt::format("{}: unknown mesh extension '{}' (use .ply, .stl, .obj or .off)", path.string(), ext));
+}
+
+std::size_t estimated_faces(const fs::path& path) {
+  std::error_code ec;
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec) return 0;
+  MeshFormat format;
+  try {
+    format = mesh_format(path);
+  } catch (const InvalidInput&) {
+    return 0;
+  }
+  std::ifstream in(path, std::ios::binary);
+  char head[512] = {};
+  in.read(head, sizeof head);
+  const std::string start(head, static_cast<std::size_t>(in.gcount()));
+  // Bytes per face, with the vertex records shared out (a closed mesh has half as many vertices
+  // as faces): binary PLY 12–24 per vertex (with normals) and 13 per face; binary STL 50 per
+  // face; text 25–40 per vertex line and 15–25 per face line; ASCII STL about 250 per facet.
+  double bytes_per_face = 40;
+  if (format == MeshFormat::ply && start.find("format ascii") == std::string::npos) bytes_per_face = 22;
+  if (format == MeshFormat::stl) bytes_per_face = start.rfind("solid", 0) == 0 && start.find("facet") != std::string::npos ? 250 : 50;
+  return static_cast<std::size_t>(static_cast<double>(size) / bytes_per_face);
 }
 
 void check_mesh_header(const fs::path& path) { io_detail::check_header(path, mesh_format(path)); }

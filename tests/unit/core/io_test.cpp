@@ -246,3 +246,24 @@ TEST(MeshIo, KeepsFullDoublePrecision) {
     EXPECT_EQ(s.vertices[0], Eigen::Vector3d(x, y, z)) << f;
   }
 }
+
+// The face count guessed from a file's size and format, binary or text, within a factor of two
+// on a mesh large enough for the header not to count; 0 where there is nothing to guess from.
+TEST(MeshIo, EstimatedFacesFromSizeAndFormat) {
+  const auto dir = scratch_dir();
+  Mesh m;
+  soup_to_mesh(test::icosphere(Eigen::Vector3d::Zero(), 10.0, 5), m);  // 20,480 faces
+  const double faces = static_cast<double>(m.n_faces());
+  for (const char* ext : {".ply", ".stl", ".obj", ".off"}) {
+    for (bool binary : {true, false}) {
+      const fs::path p = dir / (std::string("sphere_") + (binary ? "bin" : "txt") + ext);
+      write_mesh(m, p, {binary, false});
+      const double guess = static_cast<double>(estimated_faces(p));
+      EXPECT_GT(guess, 0.5 * faces) << p;
+      EXPECT_LT(guess, 2.0 * faces) << p;
+    }
+  }
+  EXPECT_EQ(estimated_faces(dir / "missing.ply"), 0u);
+  write_text(dir / "notes.txt", "not a mesh");
+  EXPECT_EQ(estimated_faces(dir / "notes.txt"), 0u);
+}

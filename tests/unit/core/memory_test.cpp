@@ -51,3 +51,20 @@ TEST(Memory, FreedBlocksComeBackWithoutPageFaults) {
   faults_to_fill(kBytes);  // the heap grows once
   EXPECT_LT(faults_to_fill(kBytes), kPages / 20);
 }
+
+// The warmer faults a block in on its own thread and hands it back to malloc: the next blocks
+// of the main thread come without faults, beyond what the heap held before.
+TEST(Memory, HeapWarmerLeavesTheHeapFaultedIn) {
+#ifdef S2C_OWN_MALLOC
+  GTEST_SKIP() << "malloc is AddressSanitizer's";
+#endif
+  constexpr std::size_t kBytes = 96u << 20;
+  constexpr long kPages = kBytes / 4096;
+  s2c::reuse_freed_memory();
+  faults_to_fill(kBytes);  // whatever the heap held before, it now holds this much
+  EXPECT_LT(faults_to_fill(kBytes), kPages / 20);
+  EXPECT_GT(faults_to_fill(2 * kBytes), kPages / 2);  // beyond it: fresh pages
+  { s2c::HeapWarmer warm(4 * kBytes); }
+  const long faults = faults_to_fill(3 * kBytes);
+  EXPECT_LT(faults, kPages / 20);
+}

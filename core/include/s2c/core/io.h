@@ -22,6 +22,11 @@ MeshFormat mesh_format(const std::filesystem::path& path);
 /// \throw IoError when the file cannot be opened.
 TriangleSoup read_soup(const std::filesystem::path& path, bool allow_empty = false);
 
+/// About how many faces a mesh file holds, from its size and format alone (binary or text is told
+/// from its first bytes), for sizing memory before reading it: within a factor of about two on
+/// ordinary files, 0 for a file that cannot be opened or an unknown extension. Never throws.
+std::size_t estimated_faces(const std::filesystem::path& path);
+
 /// Checks a mesh or cloud file's header against its size before any reader allocates on its
 /// counts (what read_soup does first; clouds read by other libraries need it too).
 /// \throw InvalidInput naming the file: bad magic, malformed header, counts the file cannot hold.
