@@ -18,11 +18,11 @@ void reuse_freed_memory() {
 }
 
 HeapWarmer::HeapWarmer(std::size_t bytes) {
-  // Taken on this thread, so from the main heap, where the arrays the caller allocates next come
-  // from; only the faulting happens on the other.
   // Never more than half the memory now free: warming must not push anything out.
   const long free_pages = sysconf(_SC_AVPHYS_PAGES), page = sysconf(_SC_PAGESIZE);
   if (free_pages > 0 && page > 0) bytes = std::min(bytes, static_cast<std::size_t>(free_pages) * page / 2);
+  // Taken on this thread, so from the main heap, where the arrays the caller allocates next come
+  // from; only the faulting happens on the other.
   block_ = bytes > 0 ? static_cast<char*>(std::malloc(bytes)) : nullptr;
   if (!block_) return;
   toucher_ = std::thread([block = block_, bytes] {

@@ -59,10 +59,11 @@ std::vector<Eigen::Vector3d> filter_normals(const MeshArrays& m, int iterations,
       std::vector<double> apart;  // |n[a] − n[b]| over the ring and f, each pair computed once
       std::vector<double> weight;
       for (int f = range.begin(); f < range.end(); ++f) {
+        // The ring, then f itself: the faces the guide is chosen from and the weights are taken over.
         ring.assign(rings.begin() + ring_start[f], rings.begin() + ring_start[f + 1]);
+        ring.push_back(f);
         Eigen::Vector3d guide = n[f];
         if (guided) {
-          ring.push_back(f);
           const std::size_t k = ring.size();
           apart.assign(k * k, 0.0);
           for (std::size_t i = 0; i < k; ++i)
@@ -74,11 +75,9 @@ std::vector<Eigen::Vector3d> filter_normals(const MeshArrays& m, int iterations,
             for (std::size_t j = 0; j < k; ++j) cost += m.farea[ring[j]] * apart[i * k + j];
             if (cost < best) best = cost, guide = n[ring[i]];
           }
-          ring.pop_back();
         }
-        // The weights' exponents for f and its ring, then all their exponentials in one call to
-        // the vectorised exp (as the tensor vote takes its weights).
-        ring.push_back(f);
+        // The weights' exponents, then all their exponentials in one call to the vectorised exp
+        // (as the tensor vote takes its weights).
         weight.resize(ring.size());
         for (std::size_t i = 0; i < ring.size(); ++i) {
           const int g = ring[i];

@@ -5,9 +5,11 @@
 #include <cmath>
 
 #include <Eigen/Dense>
+#include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
 #include "fit_util.h"
+#include "s2c/core/errors.h"
 
 namespace s2c::features {
 namespace {
@@ -212,7 +214,7 @@ bool add_manifold_edges(MeshArrays& m) {
   const int nv = m.vertices(), nf = m.faces();
   for (const auto& t : m.tri)
     for (int k = 0; k < 3; ++k)
-      if (t[k] < 0 || t[k] >= nv || t[k] == t[(k + 1) % 3]) return false;
+      if (t[k] == t[(k + 1) % 3]) return false;
   add_faces(m);
   // The side (f, i) starts a new edge unless the face across it comes earlier.
   std::vector<std::array<int, 3>> across(nf);
@@ -259,6 +261,11 @@ bool add_manifold_edges(MeshArrays& m) {
 }  // namespace
 
 MeshArrays build_arrays(TriangleSoup&& soup, bool* through_mesh) {
+  const int nv = static_cast<int>(soup.vertices.size());
+  for (std::size_t f = 0; f < soup.faces.size(); ++f)
+    for (int v : soup.faces[f])
+      if (v < 0 || v >= nv)
+        throw InvalidInput(fmt::format("face {} refers to vertex {}, but the mesh has {} vertices", f, v, nv));
   MeshArrays m;
   m.pos = std::move(soup.vertices);
   m.tri = std::move(soup.faces);

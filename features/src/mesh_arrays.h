@@ -41,7 +41,7 @@ MeshArrays build_arrays(const Mesh& mesh);
 /// no half-edge mesh is built: the edges are numbered as OpenMesh numbers them. Otherwise the
 /// list goes through soup_to_mesh, which gives faces at complex edges or vertices copies of their
 /// vertices, and `*through_mesh` is set. Either way the arrays equal
-/// build_arrays(soup_to_mesh(soup)).
+/// build_arrays(soup_to_mesh(soup)). \throw InvalidInput for a face index out of range.
 MeshArrays build_arrays(TriangleSoup&& soup, bool* through_mesh = nullptr);
 
 /// Robust normal noise σ (mm): over interior edges, the offset of one face's far vertex from the

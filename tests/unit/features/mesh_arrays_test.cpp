@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "mesh_arrays.h"
+#include "s2c/core/errors.h"
 #include "s2c/core/io.h"
 #include "s2c/features/analyze.h"
 #include "test_util.h"
@@ -90,6 +91,12 @@ TEST(MeshArraysFromFaces, NonManifoldListsGoThroughOpenMesh) {
   EXPECT_EQ(x.face_patch, y.face_patch);
   EXPECT_EQ(x.features.patches.size(), y.features.patches.size());
   EXPECT_EQ(x.features.lines.size(), y.features.lines.size());
+}
+
+TEST(MeshArraysFromFaces, AFaceIndexOutOfRangeIsAnError) {
+  TriangleSoup s = test::icosphere(Eigen::Vector3d::Zero(), 2.0, 1);
+  s.faces[3][1] = static_cast<int>(s.vertices.size());
+  EXPECT_THROW(build_arrays(std::move(s)), InvalidInput);
 }
 
 TEST(MeshArraysFromFaces, TheSoupIsTakenOver) {

@@ -1,5 +1,7 @@
 #pragma once
 /// \file How the mesh stages take memory from the system.
+#include <cstddef>
+#include <thread>
 
 namespace s2c {
 
@@ -13,13 +15,6 @@ namespace s2c {
 /// Not for scan2cad-reconstruct: there the worker threads' blocks all came from the main heap
 /// and its peak, which has a target of its own, grew by a tenth.
 void reuse_freed_memory();
-
-}  // namespace s2c
-
-#include <cstddef>
-#include <thread>
-
-namespace s2c {
 
 /// Faults in `bytes` of heap on a second thread while the caller works on one core (reading a
 /// file), then, when destroyed, waits for it and frees the block. With reuse_freed_memory() the

@@ -50,7 +50,7 @@ Analysis analyze(const Mesh& mesh, const FeatureOptions& options, nlohmann::json
 /// The same analysis of an indexed triangle list as read_soup gives it, which it takes over. A
 /// manifold list with its faces oriented alike skips the half-edge mesh (a million vertices: 0.1 GB
 /// and about a second less); any other goes through soup_to_mesh. Either way the result equals
-/// analyze(soup_to_mesh(soup)).
+/// analyze(soup_to_mesh(soup)). \throw InvalidInput for no faces or a face index out of range.
 Analysis analyze(TriangleSoup&& soup, const FeatureOptions& options, nlohmann::json* report = nullptr);
 
 }  // namespace s2c::features
