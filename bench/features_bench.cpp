@@ -11,6 +11,7 @@
 //   s2c-bench-features fits [--repeat 100]
 //   s2c-bench-features voting [--mesh MESH] [--vertices 1000000] [--repeat 10]
 //   s2c-bench-features inputs [--parts DIR] [--names …] [--sigma …] [--div 100] [--seed 1] [--out DIR]
+//   s2c-bench-features read MESH [--repeat 5]
 //
 // sweep: per part, the OpenSCAD mesh as exported ("clean CAD", σ = 0), then the mesh refined by
 // longest-edge bisection to max edge = bbox diagonal / div, with isotropic Gaussian noise of σ·h
@@ -27,6 +28,9 @@
 // on one core it varies by a few per cent where the whole analysis varies by tens.
 // inputs: the sweep's inputs (sizes, edge length, 1st percentile of the smallest angle), written as
 // PLY into --out when given (for peers and for looking at them).
+// read: the file read `scan2cad features` starts with (read_soup: binary PLY by our reader, the
+// other formats by OpenMesh's) against OpenMesh's own reading of the file into its mesh
+// (IO::read_mesh with vertex normals), the peer, alternated, best and median of --repeat each.
 // selfcheck: the truth of every part converted to a FeatureSet on the part's mesh must evaluate
 // to 1 everywhere; copies with one plane rotated and one radius scaled must lose exactly those
 // features (5°, +5 %) or nothing (1.5°, +1.5 %). Exit 1 on any failure (CTest bench_features_selfcheck).
@@ -44,6 +48,7 @@
 
 #include <Eigen/Geometry>
 #include <fstream>
+#include <OpenMesh/Core/IO/MeshIO.hh>
 #include <nlohmann/json.hpp>
 #include <tbb/task_arena.h>
 
@@ -106,7 +111,8 @@ const char* kUsage =
     "       s2c-bench-features selfcheck [--parts DIR]\n"
     "       s2c-bench-features fits [--repeat 100]\n"
     "       s2c-bench-features voting [--mesh MESH] [--vertices 1000000] [--repeat 10]\n"
-    "       s2c-bench-features inputs [--parts DIR] [--names …] [--sigma …] [--div 100] [--seed 1] [--out DIR]\n";
+    "       s2c-bench-features inputs [--parts DIR] [--names …] [--sigma …] [--div 100] [--seed 1] [--out DIR]\n"
+    "       s2c-bench-features read MESH [--repeat 5]\n";
 
 // ----------------------------------------------------------------------------- table
 void print_header() {
@@ -383,6 +389,43 @@ int cmd_speed(const Args& a) {
   return 0;
 }
 
+int cmd_read(const Args& a) {
+  if (a.positional.empty()) throw InvalidInput("read: which mesh? (s2c-bench-features read MESH)");
+  const std::string path = a.positional[0];
+  const int repeat = std::max(1, std::stoi(a.get("--repeat", "5")));
+  std::vector<double> ours, peer;
+  std::size_t vertices = 0, faces = 0, peer_faces = 0;
+  for (int i = 0; i < repeat; ++i) {
+    auto t0 = Clock::now();
+    {
+      const TriangleSoup soup = read_soup(path);
+      ours.push_back(seconds_since(t0));
+      vertices = soup.vertices.size();
+      faces = soup.faces.size();
+    }
+    t0 = Clock::now();
+    {
+      Mesh mesh;
+      mesh.request_vertex_normals();
+      OpenMesh::IO::Options opt = OpenMesh::IO::Options::VertexNormal;
+      if (!OpenMesh::IO::read_mesh(mesh, path, opt)) throw InvalidInput(path + ": OpenMesh could not read it");
+      peer.push_back(seconds_since(t0));
+      peer_faces = mesh.n_faces();
+    }
+  }
+  auto best = [](std::vector<double> v) { return *std::min_element(v.begin(), v.end()); };
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  std::printf("| mesh | bytes | vertices | faces | read_soup best / median (s) | OpenMesh read_mesh best / median (s) | "
+              "OpenMesh / ours (median) |\n|---|---|---|---|---|---|---|\n");
+  std::printf("| %s | %ju | %zu | %zu (OpenMesh %zu) | %.3f / %.3f | %.3f / %.3f | %.1f |\n",
+              std::filesystem::path(path).filename().string().c_str(), std::filesystem::file_size(path), vertices,
+              faces, peer_faces, best(ours), median(ours), best(peer), median(peer), median(peer) / median(ours));
+  return 0;
+}
+
 /// The tensor voting alone on the speed command's mesh (vote_tensors: the mesh's arrays, then the
 /// vote at the clean default radius of one median edge), best of --repeat, with the class counts.
 int cmd_voting(const Args& a) {
@@ -604,6 +647,7 @@ int main(int argc, char** argv) {
     if (cmd == "selfcheck") return cmd_selfcheck(a);
     if (cmd == "fits") return cmd_fits(a);
     if (cmd == "voting") return cmd_voting(a);
+    if (cmd == "read") return cmd_read(a);
     std::fprintf(stderr, "s2c-bench-features: unknown command %s\n%s", cmd.c_str(), kUsage);
     return 2;
   } catch (const InvalidInput& e) {

@@ -36,6 +36,15 @@ ply_bin = ("ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty dou
            "property double z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n").encode()
 ply_bin += b"".join(struct.pack("<3d", *v) for v in tetra_v) + b"".join(struct.pack("<B3i", 3, *f) for f in tetra_f)
 put("mesh", "tetra_binary.ply", b"\x00" + ply_bin)
+# Big-endian, with normals, a list before the coordinates, an element between the vertices and
+# the faces and a list after the corners: the layouts core/src/io/binary_ply.cpp walks.
+ply_be = ("ply\nformat binary_big_endian 1.0\nelement vertex 4\nproperty list uchar float w\nproperty float x\n"
+          "property float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+          "element edge 1\nproperty int vertex1\nproperty int vertex2\nelement face 4\n"
+          "property list ushort uint vertex_index\nproperty list uchar float texcoord\nend_header\n").encode()
+ply_be += b"".join(struct.pack(">Bf", 1, 0.5) + struct.pack(">6f", *v, 0, 0, 1) for v in tetra_v)
+ply_be += struct.pack(">2i", 0, 1) + b"".join(struct.pack(">H3IB2f", 3, *f, 2, 0.25, 0.75) for f in tetra_f)
+put("mesh", "tetra_big_endian.ply", b"\x00" + ply_be)
 stl_ascii = "solid t\n" + "".join("facet normal 0 0 0\nouter loop\n" + "".join("vertex %g %g %g\n" % tetra_v[i] for i in f)
                                   + "endloop\nendfacet\n" for f in tetra_f) + "endsolid t\n"
 put("mesh", "tetra_ascii.stl", b"\x01" + stl_ascii.encode())

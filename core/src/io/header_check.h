@@ -18,8 +18,8 @@ struct DeclaredCounts {
 ///        truncated binary data.
 DeclaredCounts check_header(const std::filesystem::path& path, MeshFormat format);
 
-/// Replaces OpenMesh's float coordinates by the file's full-precision values (text formats, binary
-/// PLY with double x/y/z) when they provably describe the same vertices; otherwise leaves them.
+/// Replaces OpenMesh's float coordinates by the file's full-precision values (the text formats)
+/// when they provably describe the same vertices; otherwise leaves them.
 void refine_coordinates(const std::filesystem::path& path, MeshFormat format, TriangleSoup& soup);
 
 /// Legacy VTK (ASCII POLYDATA) reader; OpenMesh has none. \throw InvalidInput with the line.

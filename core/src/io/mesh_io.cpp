@@ -8,6 +8,7 @@
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <fmt/format.h>
 
+#include "binary_ply.h"
 #include "header_check.h"
 #include "s2c/core/errors.h"
 #include "s2c/core/files.h"
@@ -91,6 +92,14 @@ TriangleSoup read_soup(const fs::path& path, bool allow_empty) {
   if (format == MeshFormat::vtk) {
     TriangleSoup soup = io_detail::read_vtk(path);
     validate_soup(path, soup, {}, soup.faces.size(), allow_empty);
+    return soup;
+  }
+  // Binary PLY, what the stages write and scanners export: our reader (binary_ply.h says why).
+  io_detail::PlyHeader ply;
+  if (format == MeshFormat::ply && declared.binary && io_detail::read_ply_header(path, ply)) {
+    std::size_t face_records = 0;
+    TriangleSoup soup = io_detail::read_binary_ply(path, ply, face_records);
+    validate_soup(path, soup, declared, face_records, allow_empty);
     return soup;
   }
   io_detail::SoupImporter importer;

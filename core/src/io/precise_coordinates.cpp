@@ -1,17 +1,17 @@
 // OpenMesh's readers parse coordinates into floats (7 digits). A CAD pipeline keeps what the
 // file says, so after OpenMesh has read the structure we read the vertex coordinates again at
-// full precision where the file has more than float precision: OBJ, OFF and ASCII PLY text, and
-// binary PLY with double x/y/z. Every value is cross-checked against OpenMesh's float; on any
+// full precision where the file has more than float precision: OBJ, OFF and ASCII PLY text
+// (binary PLY does not go through OpenMesh). Every value is cross-checked against OpenMesh's float; on any
 // doubt the float values stay.
 #include <cmath>
 #include <cstdlib>
-#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "header_check.h"
+#include "ply_header.h"
 
 namespace fs = std::filesystem;
 
@@ -68,95 +68,29 @@ bool read_off(const fs::path& p, std::size_t nv, std::vector<Eigen::Vector3d>& v
   return v.size() == nv;
 }
 
-struct PlyLayout {
-  bool ascii = false, little_endian = true;
-  std::size_t body = 0;
-  int prop_count = 0, xyz_index[3] = {-1, -1, -1};
-  int xyz_offset[3] = {0, 0, 0}, stride = 0;
-  bool xyz_double = false, vertex_first = false, fixed = true;
-};
-
-bool ply_layout(const fs::path& p, PlyLayout& L) {
-  std::ifstream f(p, std::ios::binary);
-  std::string line;
-  bool in_vertex = false;
-  int element = -1;
-  while (std::getline(f, line)) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    std::istringstream ls(line);
-    std::string kw;
-    ls >> kw;
-    if (kw == "format") {
-      std::string fmt;
-      ls >> fmt;
-      L.ascii = fmt == "ascii";
-      L.little_endian = fmt != "binary_big_endian";
-    } else if (kw == "element") {
-      std::string name;
-      ls >> name;
-      ++element;
-      in_vertex = name == "vertex";
-      if (in_vertex) {
-        L.vertex_first = element == 0;
-      } else if (element == 0) {
-        return false;
-      }
-    } else if (kw == "property" && in_vertex) {
-      std::string type, name;
-      ls >> type;
-      if (type == "list") return false;
-      ls >> name;
-      const int size = type == "double" || type == "float64" ? 8
-                       : type == "float" || type == "float32" || type == "int" || type == "uint" ||
-                               type == "int32" || type == "uint32" ? 4
-                       : type == "short" || type == "ushort" || type == "int16" || type == "uint16" ? 2 : 1;
-      for (int k = 0; k < 3; ++k)
-        if (name == std::string(1, static_cast<char>('x' + k))) {
-          L.xyz_index[k] = L.prop_count;
-          L.xyz_offset[k] = L.stride;
-          if (size == 8) L.xyz_double = true;
-          else if (type != "float" && type != "float32") return false;
-        }
-      L.stride += size;
-      ++L.prop_count;
-    } else if (kw == "end_header") {
-      L.body = static_cast<std::size_t>(f.tellg());
-      break;
-    }
-  }
-  return L.vertex_first && L.xyz_index[0] >= 0 && L.xyz_index[1] >= 0 && L.xyz_index[2] >= 0;
-}
-
+// ASCII PLY only: binary PLY is read at full precision in the first place (binary_ply.cpp).
 bool read_ply(const fs::path& p, std::size_t nv, std::vector<Eigen::Vector3d>& v) {
-  PlyLayout L;  // the vertex count comes from OpenMesh's reading; the header gives the layout
-  if (!ply_layout(p, L)) return false;
+  PlyHeader header;  // the vertex count comes from OpenMesh's reading; the header gives the layout
+  if (!read_ply_header(p, header) || header.format != PlyHeader::Format::ascii || header.elements.empty()) return false;
+  const PlyElement& vertex = header.elements.front();
+  if (vertex.name != "vertex") return false;
+  int xyz[3];
+  for (int k = 0; k < 3; ++k)
+    if ((xyz[k] = vertex.find(std::string(1, static_cast<char>('x' + k)))) < 0) return false;
+  for (const PlyProperty& prop : vertex.properties)
+    if (prop.list) return false;
   std::ifstream f(p, std::ios::binary);
-  f.seekg(static_cast<std::streamoff>(L.body));
-  if (L.ascii) {
-    std::string line;
-    while (v.size() < nv && std::getline(f, line)) {
-      if (!is_data_line(line)) continue;
-      std::istringstream ls(line);
-      std::vector<double> vals(L.prop_count);
-      for (auto& x : vals)
-        if (!(ls >> x)) return false;
-      v.emplace_back(vals[L.xyz_index[0]], vals[L.xyz_index[1]], vals[L.xyz_index[2]]);
-    }
-    return v.size() == nv;
+  f.seekg(static_cast<std::streamoff>(header.body));
+  std::string line;
+  std::vector<double> vals(vertex.properties.size());
+  while (v.size() < nv && std::getline(f, line)) {
+    if (!is_data_line(line)) continue;
+    std::istringstream ls(line);
+    for (auto& x : vals)
+      if (!(ls >> x)) return false;
+    v.emplace_back(vals[xyz[0]], vals[xyz[1]], vals[xyz[2]]);
   }
-  if (!L.xyz_double || !L.little_endian) return false;  // floats: OpenMesh already has them exactly
-  std::vector<char> rec(L.stride);
-  for (std::size_t i = 0; i < nv; ++i) {
-    if (!f.read(rec.data(), L.stride)) return false;
-    double c[3];
-    for (int k = 0; k < 3; ++k) {
-      double d;
-      std::memcpy(&d, rec.data() + L.xyz_offset[k], 8);
-      c[k] = d;
-    }
-    v.emplace_back(c[0], c[1], c[2]);
-  }
-  return true;
+  return v.size() == nv;
 }
 
 }  // namespace

@@ -4,11 +4,19 @@
 // faces, bad indices) is silently dropped before we can check it.
 #include <OpenMesh/Core/IO/importer/BaseImporter.hh>
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "s2c/core/mesh.h"
 
 namespace s2c::io_detail {
+
+/// Adds the face with the `n` corners `idx` (record `face_no` of the file) to `soup`, by fan
+/// triangulation; a face with fewer than three corners or a corner not below `vertex_count` is
+/// dropped and, if `first_error` is empty, described there.
+void add_polygon(TriangleSoup& soup, const std::int64_t* idx, std::size_t n, std::size_t vertex_count, std::size_t face_no,
+                 std::string& first_error);
 
 class SoupImporter final : public OpenMesh::IO::BaseImporter {
  public:
@@ -78,6 +86,7 @@ class SoupImporter final : public OpenMesh::IO::BaseImporter {
   void add_texture_information(int, std::string) override {}
 
  private:
+  std::vector<std::int64_t> corners_;  // add_face's corner indices, kept to save an allocation per face
   bool valid(VH vh) const { return vh.idx() >= 0 && static_cast<std::size_t>(vh.idx()) < soup.vertices.size(); }
 };
 
