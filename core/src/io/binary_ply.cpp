@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <type_traits>
 #include <vector>
 
 #include <fmt/format.h>
@@ -66,38 +67,35 @@ class Decoder {
   explicit Decoder(bool big_endian) : swap_(big_endian != host_big_endian()) {}
 
   double real(PlyType t, const char* p) const {
-    switch (t) {
-      case PlyType::int8: return get<std::int8_t>(p);
-      case PlyType::uint8: return get<std::uint8_t>(p);
-      case PlyType::int16: return get<std::int16_t>(p);
-      case PlyType::uint16: return get<std::uint16_t>(p);
-      case PlyType::int32: return get<std::int32_t>(p);
-      case PlyType::uint32: return get<std::uint32_t>(p);
-      case PlyType::float32: return get<float>(p);
-      case PlyType::float64: return get<double>(p);
-    }
-    return 0;
+    return visit<double>(t, p, [](auto v) { return static_cast<double>(v); });
   }
   /// An integer value; a real one is truncated towards zero, as OpenMesh's reader does, with NaN
   /// and values out of range mapped to -1 (no vertex: the face is then refused).
   std::int64_t integer(PlyType t, const char* p) const {
-    switch (t) {
-      case PlyType::int8: return get<std::int8_t>(p);
-      case PlyType::uint8: return get<std::uint8_t>(p);
-      case PlyType::int16: return get<std::int16_t>(p);
-      case PlyType::uint16: return get<std::uint16_t>(p);
-      case PlyType::int32: return get<std::int32_t>(p);
-      case PlyType::uint32: return get<std::uint32_t>(p);
-      case PlyType::float32:
-      case PlyType::float64: {
-        const double v = real(t, p);
+    return visit<std::int64_t>(t, p, [](auto v) -> std::int64_t {
+      if constexpr (std::is_floating_point_v<decltype(v)>)
         return v >= -1e18 && v <= 1e18 ? static_cast<std::int64_t>(v) : -1;
-      }
-    }
-    return -1;
+      else
+        return v;
+    });
   }
 
  private:
+  /// f(the value at p, in its own type).
+  template <class R, class F>
+  R visit(PlyType t, const char* p, F f) const {
+    switch (t) {
+      case PlyType::int8: return f(get<std::int8_t>(p));
+      case PlyType::uint8: return f(get<std::uint8_t>(p));
+      case PlyType::int16: return f(get<std::int16_t>(p));
+      case PlyType::uint16: return f(get<std::uint16_t>(p));
+      case PlyType::int32: return f(get<std::int32_t>(p));
+      case PlyType::uint32: return f(get<std::uint32_t>(p));
+      case PlyType::float32: return f(get<float>(p));
+      case PlyType::float64: break;
+    }
+    return f(get<double>(p));
+  }
   static bool host_big_endian() {
     const std::uint16_t one = 1;
     unsigned char first;

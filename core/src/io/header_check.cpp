@@ -1,5 +1,6 @@
 #include "header_check.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -15,6 +16,7 @@
 
 #include "s2c/core/errors.h"
 #include "s2c/core/files.h"
+#include "ply_header.h"
 
 namespace fs = std::filesystem;
 
@@ -62,6 +64,51 @@ std::uint64_t data_lines(const fs::path& p, std::uintmax_t offset) {
     if (first != std::string::npos && line[first] != '#') ++n;
   }
   return n;
+}
+
+/// The list lengths of an ASCII PLY's records: each a non-negative integer that fits its declared
+/// type, with that many values after it. OpenMesh's ASCII reader takes a length as it comes and
+/// reads that many values: a length of 3.4e16 held it for good (found by fuzzing).
+void check_ascii_ply_lists(const fs::path& p, std::uint64_t header_lines) {
+  PlyHeader header;
+  if (!read_ply_header(p, header)) return;  // check_ply reports what is wrong with the header
+  bool any_list = false;
+  for (const PlyElement& e : header.elements)
+    for (const PlyProperty& prop : e.properties) any_list |= prop.list;
+  if (!any_list) return;
+  std::ifstream in(p, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(header.body));
+  std::string line, tok;
+  std::istringstream ls;
+  std::uint64_t line_no = header_lines;
+  auto next = [&]() {  // the next value, across line ends; false at the end of the file
+    while (!(ls >> tok)) {
+      if (!std::getline(in, line)) return false;
+      ++line_no;
+      ls.clear();
+      ls.str(line);
+    }
+    return true;
+  };
+  for (const PlyElement& e : header.elements)
+    for (std::uint64_t r = 0; r < e.count; ++r)
+      for (const PlyProperty& prop : e.properties) {
+        if (!next()) return;  // too few records: the record count check has said so
+        if (!prop.list) continue;
+        const std::uint64_t max = prop.count_type == PlyType::uint8 || prop.count_type == PlyType::int8     ? 0xFFu
+                                  : prop.count_type == PlyType::uint16 || prop.count_type == PlyType::int16 ? 0xFFFFu
+                                                                                                            : 0xFFFFFFFFu;
+        char* end = nullptr;
+        errno = 0;
+        const unsigned long long n = std::strtoull(tok.c_str(), &end, 10);
+        if (tok[0] == '-' || end == tok.c_str() || *end || errno == ERANGE || n > max)
+          fail(p, fmt::format("line {}: {} {}: list '{}' has the length '{}', not a count of 0 to {}", line_no, e.name, r,
+                              prop.name, tok.substr(0, 40), max));
+        for (unsigned long long k = 0; k < n; ++k)
+          if (!next())
+            fail(p, fmt::format("truncated: {} {} of {} ends inside its list '{}' ({} values of {})", e.name, r,
+                                e.count, prop.name, k, n));
+      }
 }
 
 DeclaredCounts check_ply(const fs::path& p, std::uintmax_t size) {
@@ -160,6 +207,7 @@ DeclaredCounts check_ply(const fs::path& p, std::uintmax_t size) {
     if (found < records)
       fail(p, fmt::format("truncated: the header declares {} records (vertices, faces, ...) but only {} data lines follow",
                           records, found));
+    check_ascii_ply_lists(p, static_cast<std::uint64_t>(std::count(head.begin(), head.begin() + body_start, '\n')));
   }
   return out;
 }

@@ -183,6 +183,25 @@ TEST(MeshIo, AbsurdHeaderCountsAreRejectedBeforeAllocating) {
   expect_invalid(dir / "huge.vtk", "cannot fit");
 }
 
+// OpenMesh's ASCII reader reads as many values as a list's length says; a length of 3.4e16 held
+// it for good (fuzzing): list lengths are checked against their type and the values that follow.
+TEST(MeshIo, AsciiPlyListLengthsAreChecked) {
+  const auto dir = scratch_dir();
+  std::string huge = kAsciiPly;
+  huge.replace(huge.find("3 0 2 3"), 1, "34444444444444444");
+  write_text(dir / "huge.ply", huge);
+  expect_invalid(dir / "huge.ply", "line 15: face 1: list 'vertex_indices' has the length '34444444444444444'");
+  std::string negative = kAsciiPly;
+  negative.replace(negative.find("3 0 2 3"), 1, "-3");
+  write_text(dir / "negative.ply", negative);
+  expect_invalid(dir / "negative.ply", "has the length '-3'");
+  std::string wide = kAsciiPly;
+  wide.replace(wide.find("list uchar int"), 14, "list uint int");
+  wide.replace(wide.find("3 0 2 3"), 1, "4000000000");
+  write_text(dir / "wide.ply", wide);
+  expect_invalid(dir / "wide.ply", "face 1 of 2 ends inside its list 'vertex_indices' (3 values of 4000000000)");
+}
+
 TEST(MeshIo, EmptyMeshesAndPointClouds) {
   const auto dir = scratch_dir();
   write_text(dir / "cloud.ply",
