@@ -167,6 +167,8 @@ DeclaredCounts check_ply(const fs::path& p, std::uintmax_t size) {
         ls >> a >> b >> name;
         const int cs = ply_type_size(a), is = ply_type_size(b);
         if (!cs || !is) fail(p, fmt::format("header line {}: unknown list types '{} {}'", line_no, a, b));
+        // Without a name OpenMesh's reader loops forever (found by fuzzing).
+        if (name.empty()) fail(p, fmt::format("header line {}: the list property has no name", line_no));
         // A face needs at least three indices; other lists may be empty.
         const bool face_list = e.name == "face" && (name == "vertex_indices" || name == "vertex_index");
         e.min_bytes += binary ? cs + (face_list ? 3 * is : 0) : (face_list ? 8 : 2);
@@ -174,6 +176,7 @@ DeclaredCounts check_ply(const fs::path& p, std::uintmax_t size) {
         ls >> name;
         const int s = ply_type_size(type);
         if (!s) fail(p, fmt::format("header line {}: unknown property type '{}'", line_no, type));
+        if (name.empty()) fail(p, fmt::format("header line {}: the property has no name", line_no));
         e.min_bytes += binary ? s : 2;
         if (e.name == "vertex" && (name == "x" || name == "y" || name == "z")) e.xyz[name[0] - 'x'] = true;
       }

@@ -185,7 +185,8 @@ TEST(MeshIo, AbsurdHeaderCountsAreRejectedBeforeAllocating) {
 
 // OpenMesh's ASCII reader reads as many values as a list's length says; a length of 3.4e16 held
 // it for good (fuzzing): list lengths are checked against their type and the values that follow.
-TEST(MeshIo, AsciiPlyListLengthsAreChecked) {
+// A list property without a name sent it into a loop too.
+TEST(MeshIo, PlyListsAreCheckedBeforeOpenMeshReadsThem) {
   const auto dir = scratch_dir();
   std::string huge = kAsciiPly;
   huge.replace(huge.find("3 0 2 3"), 1, "34444444444444444");
@@ -195,6 +196,10 @@ TEST(MeshIo, AsciiPlyListLengthsAreChecked) {
   negative.replace(negative.find("3 0 2 3"), 1, "-3");
   write_text(dir / "negative.ply", negative);
   expect_invalid(dir / "negative.ply", "has the length '-3'");
+  std::string unnamed = binary_ply_triangle();
+  unnamed.replace(unnamed.find(" vertex_indices"), 15, "");
+  write_text(dir / "unnamed.ply", unnamed);
+  expect_invalid(dir / "unnamed.ply", "header line 8: the list property has no name");
   std::string wide = kAsciiPly;
   wide.replace(wide.find("list uchar int"), 14, "list uint int");
   wide.replace(wide.find("3 0 2 3"), 1, "4000000000");
