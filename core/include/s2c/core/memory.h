@@ -1,5 +1,6 @@
 #pragma once
 /// \file How the mesh stages take memory from the system.
+#include <atomic>
 #include <cstddef>
 #include <thread>
 
@@ -17,10 +18,11 @@ namespace s2c {
 void reuse_freed_memory();
 
 /// Faults in `bytes` of heap on a second thread while the caller works on one core (reading a
-/// file), then, when destroyed, waits for it and frees the block. With reuse_freed_memory() the
-/// block stays in malloc's free lists, so the arrays allocated next get pages that are already
-/// backed. What a million-vertex mesh's analysis would spend on first touches runs beside the
-/// parse of its file instead (bench/README, "features: the file read").
+/// file), a chunk at a time; when destroyed, faults in the chunks still left on the caller's
+/// thread as well, then frees the block. With reuse_freed_memory() the block stays in malloc's
+/// free lists, so the arrays allocated next get pages that are already backed. What a
+/// million-vertex mesh's analysis would spend on first touches runs beside the parse of its file
+/// instead (bench/README, "features: the file read" and "the binary PLY reader").
 class HeapWarmer {
  public:
   explicit HeapWarmer(std::size_t bytes);
@@ -29,7 +31,12 @@ class HeapWarmer {
   HeapWarmer& operator=(const HeapWarmer&) = delete;
 
  private:
+  /// Faults in chunk after chunk until none is left (the toucher, then the destructor as well).
+  void warm_chunks();
+
   char* block_ = nullptr;
+  std::size_t bytes_ = 0;
+  std::atomic<std::size_t> next_chunk_{0};
   std::thread toucher_;
 };
 
