@@ -115,8 +115,9 @@ class Decoder {
   bool swap_;
 };
 
-/// Reads the records of one element through `on_record(property, bytes, list_length)`, called
-/// once per property of each record in order (for a list, `bytes` holds its entries).
+/// Reads the records of one element through `on_property(index, bytes, count)`, called once per
+/// property of each record, in order: `count` values of the property's type at `bytes` (one for
+/// a scalar, the entries of a list).
 class RecordWalker {
  public:
   RecordWalker(const fs::path& path, ByteSource& src, const Decoder& dec) : path_(path), src_(src), dec_(dec) {}
@@ -166,7 +167,7 @@ struct VertexFields {
 void read_vertices(const PlyElement& e, RecordWalker& walker, const Decoder& dec, TriangleSoup& soup) {
   const VertexFields at(e);
   // check_header refused a vertex element without x, y or z, and counts the file cannot hold,
-  // so the count is safe to reserve.
+  // so the count is safe to allocate.
   soup.vertices.resize(e.count, Eigen::Vector3d::Zero());
   if (at.has_normals()) soup.normals.resize(e.count, Eigen::Vector3d::Zero());
   // Which coordinate (0-2), or normal component (3-5), each property holds; -1 for none.
@@ -176,7 +177,7 @@ void read_vertices(const PlyElement& e, RecordWalker& walker, const Decoder& dec
     if (at.has_normals()) slot[at.normal[k]] = 3 + k;
   }
   std::size_t v = 0;
-  std::size_t last = e.properties.size() - 1;
+  const std::size_t last = e.properties.size() - 1;
   walker.walk(e, [&](std::size_t k, const char* bytes, std::uint64_t n) {
     const int s = slot[k];
     if (s >= 0 && n > 0 && !e.properties[k].list) {
