@@ -1,8 +1,8 @@
 // OpenMesh's readers parse coordinates into floats (7 digits). A CAD pipeline keeps what the
 // file says, so after OpenMesh has read the structure we read the vertex coordinates again at
 // full precision where the file has more than float precision: OBJ, OFF and ASCII PLY text
-// (binary PLY does not go through OpenMesh). Every value is cross-checked against OpenMesh's float; on any
-// doubt the float values stay.
+// (binary PLY does not go through OpenMesh). Every value is cross-checked against OpenMesh's
+// float; on any doubt the float values stay.
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
