@@ -6,7 +6,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
-#include <map>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -44,12 +43,8 @@ std::uint64_t parse_count(const fs::path& p, const std::string& tok, const char*
 }
 
 int ply_type_size(const std::string& t) {
-  static const std::map<std::string, int> sizes = {
-      {"char", 1}, {"uchar", 1}, {"int8", 1}, {"uint8", 1}, {"short", 2}, {"ushort", 2},
-      {"int16", 2}, {"uint16", 2}, {"int", 4}, {"uint", 4}, {"int32", 4}, {"uint32", 4},
-      {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
-  auto it = sizes.find(t);
-  return it == sizes.end() ? 0 : it->second;
+  PlyType type;
+  return parse_ply_type(t, type) ? ply_size(type) : 0;
 }
 
 // Lines holding data after byte `offset` (comments and blank lines excluded). OpenMesh's ASCII

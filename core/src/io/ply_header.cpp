@@ -5,9 +5,8 @@
 #include <sstream>
 
 namespace s2c::io_detail {
-namespace {
 
-bool parse_type(const std::string& name, PlyType& out) {
+bool parse_ply_type(const std::string& name, PlyType& out) {
   static const std::map<std::string, PlyType> types = {
       {"char", PlyType::int8},     {"int8", PlyType::int8},       {"uchar", PlyType::uint8},
       {"uint8", PlyType::uint8},   {"short", PlyType::int16},     {"int16", PlyType::int16},
@@ -20,8 +19,6 @@ bool parse_type(const std::string& name, PlyType& out) {
   out = it->second;
   return true;
 }
-
-}  // namespace
 
 int ply_size(PlyType t) {
   switch (t) {
@@ -71,9 +68,9 @@ bool read_ply_header(const std::filesystem::path& path, PlyHeader& out) {
         std::string count_type;
         ls >> count_type >> type;
         p.list = true;
-        if (!parse_type(count_type, p.count_type)) return false;
+        if (!parse_ply_type(count_type, p.count_type)) return false;
       }
-      if (!parse_type(type, p.type) || !(ls >> p.name)) return false;
+      if (!parse_ply_type(type, p.type) || !(ls >> p.name)) return false;
       out.elements.back().properties.push_back(std::move(p));
     } else if (kw == "end_header") {
       const auto at = f.tellg();

@@ -11,6 +11,9 @@ namespace s2c::io_detail {
 
 enum class PlyType : unsigned char { int8, uint8, int16, uint16, int32, uint32, float32, float64 };
 
+/// The type a header names ("float", "uint8", ...); false for a name PLY does not have.
+bool parse_ply_type(const std::string& name, PlyType& out);
+
 /// Bytes of one value of `t` in a binary file.
 int ply_size(PlyType t);
 
