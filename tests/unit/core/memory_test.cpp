@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <malloc.h>
 #include <sys/resource.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 
@@ -67,4 +69,44 @@ TEST(Memory, HeapWarmerLeavesTheHeapFaultedIn) {
   { s2c::HeapWarmer warm(4 * kBytes); }
   const long faults = faults_to_fill(3 * kBytes);
   EXPECT_LT(faults, kPages / 20);
+}
+
+namespace {
+
+/// kB of anonymous memory of this process on 2 MB pages (/proc/self/smaps_rollup).
+long anon_huge_kb() {
+  FILE* f = std::fopen("/proc/self/smaps_rollup", "r");
+  if (!f) return -1;
+  char line[256];
+  long kb = -1;
+  while (std::fgets(line, sizeof line, f))
+    if (std::sscanf(line, "AnonHugePages: %ld kB", &kb) == 1) break;
+  std::fclose(f);
+  return kb;
+}
+
+}  // namespace
+
+// Where the kernel offers transparent huge pages, the warmer's block is on 2 MB pages: the
+// block's worth of them appears in the process, and filling it afterwards takes almost no faults
+// (one per 2 MB at most where the kernel had none to give).
+TEST(Memory, HeapWarmerUsesHugePagesWhereTheKernelHasThem) {
+#ifdef S2C_OWN_MALLOC
+  GTEST_SKIP() << "malloc is AddressSanitizer's";
+#endif
+  if (!s2c::transparent_huge_pages()) GTEST_SKIP() << "transparent huge pages are off on this machine";
+  constexpr std::size_t kBytes = 128u << 20;
+  s2c::reuse_freed_memory();
+  malloc_trim(0);  // what earlier tests left faulted in goes back: the block is fresh memory
+  const long before = anon_huge_kb();
+  ASSERT_GE(before, 0) << "no AnonHugePages line in /proc/self/smaps_rollup";
+  bool huge = false;
+  {
+    s2c::HeapWarmer warm(kBytes);
+    huge = warm.huge_pages();
+  }
+  ASSERT_TRUE(huge);
+  // At least half of it: the kernel may be short of free 2 MB blocks.
+  EXPECT_GT(anon_huge_kb() - before, static_cast<long>(kBytes / 1024 / 2));
+  EXPECT_LT(faults_to_fill(kBytes / 2), static_cast<long>(kBytes / 4096 / 20));
 }
