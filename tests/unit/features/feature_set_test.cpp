@@ -79,6 +79,20 @@ TEST(FeatureSetJson, RoundTripKeepsEverything) {
   EXPECT_EQ(g.adjacency.size(), 2u);
 }
 
+// The text is dump(1)'s but for arrays of numbers or strings, one line each: a million-face
+// part's face lists are most of the file. Everything else is as the JSON library writes it.
+TEST(FeatureSetJson, ListsOfNumbersAndNamesTakeOneLine) {
+  FeatureSet f = sample();
+  f.patches[1].faces = {2, 3, 4, 4294967, -1};
+  f.patches[1].area = 0.1;
+  const std::string text = to_json_text(f);
+  EXPECT_NE(text.find("\"faces\": [2, 3, 4, 4294967, -1]"), std::string::npos) << text;
+  EXPECT_NE(text.find("\"members\": [\"P0\", \"P1\"]"), std::string::npos) << text;
+  EXPECT_NE(text.find("\"area\": 0.1,"), std::string::npos) << text;
+  EXPECT_NE(text.find("\n \"patches\": [\n  {\n   \"area\""), std::string::npos) << text;
+  EXPECT_EQ(text.back(), '\n');
+}
+
 TEST(FeatureSetJson, EveryConstraintNameRoundTrips) {
   for (int k = 0; k <= static_cast<int>(ConstraintKind::equal_radius); ++k) {
     const auto kind = static_cast<ConstraintKind>(k);
