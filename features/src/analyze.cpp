@@ -74,22 +74,28 @@ void add_adjacency(const MeshArrays& m, const Segmentation& seg, FeatureSet& f) 
   auto add = [&](const std::string& a, const std::string& b) {
     if (a != b) pairs.emplace(std::min(a, b), std::max(a, b));
   };
-  std::vector<std::vector<int>> vertex_lines(m.vertices());
+  // (vertex, line) for every vertex of every line, by vertex: a few per cent of the vertices have
+  // lines (a list per vertex was 23 MB of empty lists at a million vertices).
+  std::vector<std::pair<int, int>> line_at;
   for (std::size_t l = 0; l < f.lines.size(); ++l)
-    for (int v : f.lines[l].vertices) vertex_lines[v].push_back(static_cast<int>(l));
-  std::vector<int> around;
+    for (int v : f.lines[l].vertices) line_at.emplace_back(v, static_cast<int>(l));
+  std::sort(line_at.begin(), line_at.end());
+  std::vector<int> around, lines_here;
+  auto next = line_at.begin();
   for (int v = 0; v < m.vertices(); ++v) {
+    lines_here.clear();
+    for (; next != line_at.end() && next->first == v; ++next) lines_here.push_back(next->second);
     around.clear();
     for (int k = m.vf_start[v]; k < m.vf_start[v + 1]; ++k) around.push_back(seg.face_region[m.vf[k]]);
     std::sort(around.begin(), around.end());
     around.erase(std::unique(around.begin(), around.end()), around.end());
     for (std::size_t i = 0; i < around.size(); ++i) {
       for (std::size_t j = i + 1; j < around.size(); ++j) add(f.patches[around[i]].id, f.patches[around[j]].id);
-      for (int l : vertex_lines[v]) add(f.patches[around[i]].id, f.lines[l].id);
+      for (int l : lines_here) add(f.patches[around[i]].id, f.lines[l].id);
     }
-    for (std::size_t i = 0; i < vertex_lines[v].size(); ++i)
-      for (std::size_t j = i + 1; j < vertex_lines[v].size(); ++j)
-        add(f.lines[vertex_lines[v][i]].id, f.lines[vertex_lines[v][j]].id);
+    for (std::size_t i = 0; i < lines_here.size(); ++i)
+      for (std::size_t j = i + 1; j < lines_here.size(); ++j)
+        add(f.lines[lines_here[i]].id, f.lines[lines_here[j]].id);
   }
   // Natural order: P before L, numbers ascending.
   auto key = [](const std::string& id) { return std::make_pair(id[0] == 'L', std::stoi(id.substr(1))); };

@@ -317,16 +317,26 @@ namespace {
 /// noisy creases the flood fill leaked through) by fit-driven region growing: from a seed face,
 /// fit the simplest shape to its neighbourhood, grow over faces within tolerance of that shape,
 /// refit as it grows, carve it out, repeat on the rest.
+/// Per-face state of the splits, over the whole mesh, shared by the regions split side by side:
+/// each split reads and writes only the entries of its own region's faces (hash maps of a
+/// region's faces cost more than the fits on million-face regions; arrays of its own per region
+/// took 10 MB each of fresh memory on the worker threads).
+struct SplitState {
+  explicit SplitState(int faces) : state(faces, 0), stamp(faces, 0) {}
+  std::vector<unsigned char> state;
+  std::vector<int> stamp;  ///< faces visited by a region's current search: stamp == its epoch
+};
+
 std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals,
-                                 const std::vector<VertexTensor>& tensors, const std::vector<int>& faces,
-                                 const SegmentParams& p) {
-  // Per-face state over the whole mesh (regions are split in parallel, each with its own arrays;
-  // hash maps of the region's faces cost more than the fits on million-face regions).
+                                 const std::vector<VertexTensor>& tensors, const std::vector<int>& face_region,
+                                 int region, const std::vector<int>& faces, const SegmentParams& p,
+                                 SplitState& shared) {
   enum : unsigned char { kRemaining = 1, kTried = 2 };
-  std::vector<unsigned char> state(m.faces(), 0);
+  std::vector<unsigned char>& state = shared.state;
+  std::vector<int>& stamp = shared.stamp;
   for (int f : faces) state[f] = kRemaining;
-  auto remaining = [&](int f) { return (state[f] & kRemaining) != 0; };
-  std::vector<int> stamp(m.faces(), 0);  // faces visited by the current search: stamp == epoch
+  // Another region's faces are never read: another split may be writing them.
+  auto remaining = [&](int f) { return face_region[f] == region && (state[f] & kRemaining) != 0; };
   int epoch = 0;
   const double cos_tol = std::cos(p.normal_tol_deg * M_PI / 180.0);
   auto fits = [&](const Shape& shape, int f) {
@@ -556,8 +566,10 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
     auto needs_split = [](const Region& r) { return r.fit.shape.type == ShapeType::freeform && r.faces.size() >= 6; };
     const int nr = static_cast<int>(seg.regions.size());
     std::vector<std::vector<Region>> parts(nr);  // regions are split independently, in parallel
+    SplitState shared(nf);
     tbb::parallel_for(0, nr, [&](int r) {
-      if (needs_split(seg.regions[r])) parts[r] = split_region(m, normals, tensors, seg.regions[r].faces, p);
+      if (needs_split(seg.regions[r]))
+        parts[r] = split_region(m, normals, tensors, seg.face_region, r, seg.regions[r].faces, p, shared);
     });
     std::vector<Region> all;
     for (int r = 0; r < nr; ++r) {
