@@ -14,7 +14,7 @@
 
 namespace {
 
-constexpr std::size_t kHeapPerFace = 175;
+constexpr std::size_t kHeapPerFace = 150;
 
 }  // namespace
 
@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
     std::string hash;
     {
       s2c::Report::Step t(report, "read");
-      // The analysis takes about 175 bytes of heap per face (a million vertices: 340 MB) that it
+      // The analysis takes about 150 bytes of heap per face (a million vertices: 300 MB) that it
       // would fault in page by page; the idle core does it while this one parses the file.
       s2c::HeapWarmer warm(kHeapPerFace * s2c::estimated_faces(input));
       // The file's hash beside its parse (0.04 s for a million-vertex PLY).

@@ -27,7 +27,9 @@ void face_ring(const MeshArrays& m, int f, std::vector<int>& out) {
 }  // namespace
 
 std::vector<Eigen::Vector3d> filter_normals(const MeshArrays& m, int iterations, double sigma_r) {
-  std::vector<Eigen::Vector3d> n = m.fnormal, next(m.faces());
+  std::vector<Eigen::Vector3d> n = m.fnormal, next(m.faces()), centroid(m.faces());
+  // (Every face's centroid is read once per ring it is in and iteration: stored for the filter.)
+  tbb::parallel_for(0, m.faces(), [&](int f) { centroid[f] = m.centroid(f); });
   const double sigma_s = std::max(m.mean_edge, 1e-12);
   const double inv_s2 = 1.0 / (sigma_s * sigma_s), inv_r2 = 1.0 / (sigma_r * sigma_r);
   // Plain bilateral filtering keeps outliers: a sliver whose noisy normal is 50° off its
@@ -81,7 +83,7 @@ std::vector<Eigen::Vector3d> filter_normals(const MeshArrays& m, int iterations,
         weight.resize(ring.size());
         for (std::size_t i = 0; i < ring.size(); ++i) {
           const int g = ring[i];
-          weight[i] = -0.5 * ((m.centroid[f] - m.centroid[g]).squaredNorm() * inv_s2 + (guide - n[g]).squaredNorm() * inv_r2);
+          weight[i] = -0.5 * ((centroid[f] - centroid[g]).squaredNorm() * inv_s2 + (guide - n[g]).squaredNorm() * inv_r2);
         }
         exp_in_place(weight.data(), weight.size());
         Eigen::Vector3d sum = Eigen::Vector3d::Zero();

@@ -63,11 +63,10 @@ double quadric_residual(const std::vector<Eigen::Vector3d>& points) {
 
 namespace {
 
-/// Face normals, areas and centroids from pos and tri, and the vertex→face incidence (CSR).
+/// Face normals and areas from pos and tri, and the vertex→face incidence (CSR).
 void add_faces(MeshArrays& m) {
   const int nv = m.vertices(), nf = m.faces();
   m.fnormal.resize(nf);
-  m.centroid.resize(nf);
   m.farea.resize(nf);
   tbb::parallel_for(0, nf, [&](int f) {
     const auto& t = m.tri[f];
@@ -75,7 +74,6 @@ void add_faces(MeshArrays& m) {
     const double len = n.norm();
     m.farea[f] = 0.5 * len;
     m.fnormal[f] = len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
-    m.centroid[f] = (m.pos[t[0]] + m.pos[t[1]] + m.pos[t[2]]) / 3.0;
   });
   m.vf_start.assign(nv + 1, 0);
   for (const auto& t : m.tri)

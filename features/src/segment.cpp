@@ -96,7 +96,7 @@ double growth_cost(const MeshArrays& m, const std::vector<Eigen::Vector3d>& norm
   if (r.fit.shape.type == ShapeType::freeform) return 2.0 * (1.0 - n.dot(normals[via])) + 1.0;
   double d = 0;
   for (int v : m.tri[f]) d = std::max(d, distance(r.fit.shape, m.pos[v]));
-  const Eigen::Vector3d sn = surface_normal(r.fit.shape, m.centroid[f]);
+  const Eigen::Vector3d sn = surface_normal(r.fit.shape, m.centroid(f));
   const double agree = std::abs(sn.dot(n));
   return d / tolerance + 4.0 * (1.0 - agree);
 }
@@ -342,7 +342,7 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
   auto fits = [&](const Shape& shape, int f) {
     for (int v : m.tri[f])
       if (distance(shape, m.pos[v]) > 1.5 * p.tolerance) return false;
-    return std::abs(surface_normal(shape, m.centroid[f]).dot(normals[f])) >= cos_tol;
+    return std::abs(surface_normal(shape, m.centroid(f)).dot(normals[f])) >= cos_tol;
   };
   auto neighbours = [&](int f, auto&& visit) {
     for (int e : m.face_edges[f]) {

@@ -7,7 +7,7 @@
 #include <limits>
 
 #include <Eigen/Eigenvalues>
-#include <tbb/enumerable_thread_specific.h>
+#include <tbb/task_arena.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_sort.h>
@@ -64,15 +64,33 @@ std::vector<std::int64_t> plane_groups(const std::vector<Eigen::Vector3d>& norma
 
 }  // namespace
 
-std::vector<Eigen::Vector4d> face_balls(const MeshArrays& m) {
-  std::vector<Eigen::Vector4d> ball(m.faces());
+namespace {
+
+/// face_balls into `ball` (m.faces() long).
+void fill_face_balls(const MeshArrays& m, std::vector<Eigen::Vector4f>& ball) {
   tbb::parallel_for(tbb::blocked_range<int>(0, m.faces(), 4096), [&](const tbb::blocked_range<int>& range) {
     for (int f = range.begin(); f < range.end(); ++f) {
+      const Eigen::Vector3d c = m.centroid(f);
       double r2 = 0;
-      for (int u : m.tri[f]) r2 = std::max(r2, (m.pos[u] - m.centroid[f]).squaredNorm());
-      ball[f] << m.centroid[f], std::sqrt(r2);
+      for (int u : m.tri[f]) r2 = std::max(r2, (m.pos[u] - c).squaredNorm());
+      // The centre rounded to float is off by up to half a float step: the radius grows by that
+      // much and is rounded up, so the ball about the rounded centre still holds the triangle.
+      // Out of float's range (or not finite) the radius is infinite: the ball rejects nothing.
+      const Eigen::Vector3f cf = c.cast<float>();
+      const double r = std::sqrt(r2) + (c - cf.cast<double>()).norm();
+      float rf = static_cast<float>(r);
+      if (rf < r) rf = std::nextafter(rf, std::numeric_limits<float>::infinity());
+      if (!cf.allFinite() || !std::isfinite(rf)) rf = std::numeric_limits<float>::infinity();
+      ball[f] = Eigen::Vector4f(cf.x(), cf.y(), cf.z(), rf);
     }
   });
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector4f> face_balls(const MeshArrays& m) {
+  std::vector<Eigen::Vector4f> ball(m.faces());
+  fill_face_balls(m, ball);
   return ball;
 }
 
@@ -97,10 +115,11 @@ std::vector<int> vertex_order(const MeshArrays& m) {
 /// holds it (ball[f]) already lies beyond `far` of p. Compared squared, with a margin that keeps
 /// every face within reach: no square root on the path of every face tested. The walk of vote()
 /// and plainly_flat both test faces with it, so a face one counts as within reach the other does.
-double squared_distance_within(const MeshArrays& m, const std::vector<Eigen::Vector4d>& ball, int f,
+double squared_distance_within(const MeshArrays& m, const std::vector<Eigen::Vector4f>& ball, int f,
                                const Eigen::Vector3d& p, double far) {
-  const double beyond = (ball[f][3] + far) * (1.0 + 1e-9);
-  if ((ball[f].head<3>() - p).squaredNorm() > beyond * beyond) return std::numeric_limits<double>::infinity();
+  const Eigen::Vector4f& b = ball[f];
+  const double beyond = (static_cast<double>(b[3]) + far) * (1.0 + 1e-9);
+  if ((b.head<3>().cast<double>() - p).squaredNorm() > beyond * beyond) return std::numeric_limits<double>::infinity();
   const auto& tri = m.tri[f];
   return (closest_point_on_triangle(p, m.pos[tri[0]], m.pos[tri[1]], m.pos[tri[2]]) - p).squaredNorm();
 }
@@ -114,7 +133,7 @@ struct CellEntry {
 
 /// plainly_flat, with the balls of face_balls(m) and the order of vertex_order(m).
 std::vector<char> plainly_flat(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals,
-                               const std::vector<Eigen::Vector4d>& ball, double radius, const VotingThresholds& t,
+                               const std::vector<Eigen::Vector4f>& ball, double radius, const VotingThresholds& t,
                                const std::vector<int>& order) {
   const int nv = m.vertices(), nf = m.faces();
   std::vector<char> flat(nv, 0);
@@ -245,7 +264,6 @@ std::vector<char> plainly_flat(const MeshArrays& m, const std::vector<Eigen::Vec
 std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, double radius,
                                const VotingThresholds& t) {
   const int nv = m.vertices(), nf = m.faces();
-  std::vector<VertexTensor> out(nv);
   // μ_f = (A_f / A_max) exp(−d / (σ/3)) with σ the voting radius. Two deviations from the paper,
   // both for CAD tessellations with long skinny triangles: d is the distance from the vertex to
   // the triangle (not to its centroid, which can be far away for a face touching the vertex), and
@@ -263,22 +281,27 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
   };
   // Per face its centroid and the radius of the ball about it holding the triangle, side by
   // side: the test that rejects most queued faces then reads one cache line, not two arrays.
-  std::vector<Eigen::Vector4d> ball;
+  // In float: 31 MB instead of 62 at two million faces, for a test that only has to be sure.
+  // (Allocated here, on the caller's thread: a worker would take them from its own malloc arena,
+  // fresh pages, where the caller's heap holds pages the reading already faulted in.)
+  std::vector<Eigen::Vector4f> ball(nf);
   std::vector<int> order;  // (a walk over every face on one core, beside the balls on all)
-  tbb::parallel_invoke([&] { ball = face_balls(m); }, [&] { order = vertex_order(m); });
+  tbb::parallel_invoke([&] { fill_face_balls(m, ball); }, [&] { order = vertex_order(m); });
   // Vertices amid a plane (most of a CAD part's) are face vertices whatever the exact weights.
   const std::vector<char> flat = plainly_flat(m, normals, ball, radius, t, order);
-  tbb::enumerable_thread_specific<Scratch> scratch(
-      [nf, nv] { return Scratch{std::vector<int>(nf, -1), std::vector<int>(nv, -1), {}, {}, {}}; });
+  // (Taken after plainly_flat's grid is freed: the two at once were the analysis' peak.)
+  std::vector<VertexTensor> out(nv);
+  // One scratch per thread of the arena, allocated here for the same reason as the balls.
+  std::vector<Scratch> scratch(static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
+  for (Scratch& s : scratch) s.mark.assign(nf, -1), s.expanded.assign(nv, -1);
   tbb::parallel_for(tbb::blocked_range<int>(0, nv, 256), [&](const tbb::blocked_range<int>& range) {
-    Scratch& s = scratch.local();
+    Scratch& s = scratch[static_cast<std::size_t>(tbb::this_task_arena::current_thread_index())];
     for (int i = range.begin(); i < range.end(); ++i) {
       const int v = order[i];
       if (flat[v]) {
         VertexTensor& out_v = out[v];
         out_v.lambda = Eigen::Vector3d(1.0, 0.0, 0.0);
-        out_v.e1 = normals[m.vf[m.vf_start[v]]];
-        out_v.e3 = out_v.e1.unitOrthogonal();
+        out_v.e3 = normals[m.vf[m.vf_start[v]]].unitOrthogonal();
         out_v.cls = VertexClass::face;
         continue;
       }
@@ -334,7 +357,6 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
       VertexTensor& out_v = out[v];
       if (!(ev[2] > 0)) continue;  // isolated vertex or only degenerate faces: a face vertex
       out_v.lambda = Eigen::Vector3d(1.0, std::max(ev[1], 0.0) / ev[2], std::max(ev[0], 0.0) / ev[2]);
-      out_v.e1 = es.eigenvectors().col(2);
       out_v.e3 = es.eigenvectors().col(0);
       out_v.cls = out_v.lambda[2] > t.corner ? VertexClass::corner
                   : out_v.lambda[1] > t.crease ? VertexClass::crease

@@ -18,8 +18,9 @@ struct VotingThresholds {
 /// off the crease in the band. Noise of slope s = noise/edge adds about s² to λ2/λ1 and λ3/λ1.
 VotingThresholds voting_thresholds(double min_crease_deg, double noise, double edge);
 
-/// Per face the smallest ball about its centroid that holds it: centre, radius.
-std::vector<Eigen::Vector4d> face_balls(const MeshArrays& m);
+/// Per face a ball about its centroid that holds it: centre, radius, in float (the centre rounded,
+/// the radius grown by the rounding and rounded up; infinite where float cannot hold the face).
+std::vector<Eigen::Vector4f> face_balls(const MeshArrays& m);
 
 /// Vertices whose vote is plainly a face vote, without voting: every face within `radius` of the
 /// vertex lies in one plane (its faces' normals within a small angle of one another, see
@@ -27,8 +28,8 @@ std::vector<Eigen::Vector4d> face_balls(const MeshArrays& m);
 std::vector<char> plainly_flat(const MeshArrays& m, const std::vector<Eigen::Vector3d>& face_normals, double radius,
                                const VotingThresholds& t);
 
-/// The tensors of all vertices. Plainly flat vertices get λ = (1, 0, 0), e1 their faces' normal
-/// (exact up to tan² of 1e-3 rad) without the walk over their neighbourhood.
+/// The tensors of all vertices. Plainly flat vertices get λ = (1, 0, 0) (exact up to tan² of 1e-3
+/// rad) and e3 perpendicular to their faces' normal, without the walk over their neighbourhood.
 std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vector3d>& face_normals, double radius,
                                const VotingThresholds& t);
 
