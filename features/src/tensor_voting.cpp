@@ -272,7 +272,7 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
   // Bounds with a margin over the radius for tests on squared distances: a face they reject is
   // farther than the radius whatever the rounding, so the faces voting are exactly those within it.
   const double far = radius * (1.0 + 1e-9), far2 = far * far * (1.0 + 1e-9);
-  struct Scratch {
+  struct alignas(128) Scratch {  // (a cache line pair of its own: threads write their vectors' ends)
     std::vector<int> mark;      // face f queued for the current vertex: mark[f] == vertex
     std::vector<int> expanded;  // vertex u's faces queued: expanded[u] == vertex
     std::vector<int> queue;

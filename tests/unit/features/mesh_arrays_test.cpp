@@ -24,7 +24,6 @@ void expect_same(const MeshArrays& a, const MeshArrays& b) {
   EXPECT_EQ(a.pos, b.pos);
   EXPECT_EQ(a.tri, b.tri);
   EXPECT_EQ(a.fnormal, b.fnormal);
-  EXPECT_EQ(a.centroid, b.centroid);
   EXPECT_EQ(a.farea, b.farea);
   EXPECT_EQ(a.vf_start, b.vf_start);
   EXPECT_EQ(a.vf, b.vf);
