@@ -1,6 +1,4 @@
 // scan2cad-features: a mesh → features.json (patches, lines, groups, constraints: the hyper-mesh).
-#include <future>
-
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
@@ -82,10 +80,8 @@ int main(int argc, char** argv) {
       // The analysis takes about 150 bytes of heap per face (a million vertices: 300 MB) that it
       // would fault in page by page; the idle core does it while this one parses the file.
       s2c::HeapWarmer warm(kHeapPerFace * s2c::estimated_faces(input));
-      // The file's hash beside its parse (0.04 s for a million-vertex PLY).
-      auto hashing = std::async(std::launch::async, [&] { return s2c::sha256_file(input); });
       soup = s2c::read_soup(input);
-      hash = hashing.get();
+      hash = s2c::sha256_file(input);
     }
     s2c::Mesh mesh;
     if (!segments.empty()) s2c::soup_to_mesh(soup, mesh);
