@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
 
 #include "s2c/core/errors.h"
 #include "s2c/core/files.h"
@@ -39,9 +40,22 @@ void print_scalar(const json& j, std::string& out) {
   }
 }
 
+/// Appends face indices as print() appends an array of integers.
+void print_indices(const std::vector<int>& indices, std::string& out) {
+  out += '[';
+  char digits[16];
+  for (std::size_t k = 0; k < indices.size(); ++k) {
+    if (k > 0) out += ", ";
+    out.append(digits, std::to_chars(digits, digits + sizeof digits, indices[k]).ptr);
+  }
+  out += ']';
+}
+
 /// Appends `j` as dump(1) does, except that an array of scalars goes on one line: a million-face
 /// part's patches list two million face indices, which one per line made a 25 MB file (17 MB so).
-void print(const json& j, int depth, std::string& out) {
+/// `faces`, when given, is printed as the value of the key "faces" of the object `j` (a patch's:
+/// not copied into the JSON tree first).
+void print(const json& j, int depth, std::string& out, const std::vector<int>* faces = nullptr) {
   auto newline = [&](int d) {
     out += '\n';
     out.append(static_cast<std::size_t>(d), ' ');
@@ -54,7 +68,10 @@ void print(const json& j, int depth, std::string& out) {
       newline(depth + 1);
       out += json(key).dump();
       out += ": ";
-      print(value, depth + 1, out);
+      if (faces && key == "faces")
+        print_indices(*faces, out);
+      else
+        print(value, depth + 1, out);
       sep = ",";
     }
     newline(depth);
@@ -219,9 +236,11 @@ ConstraintKind constraint_kind(const std::string& name) {
 std::string to_json_text(const FeatureSet& f) {
   json doc = {{"format", kFormat},
               {"mesh", {{"vertices", f.mesh_vertices}, {"faces", f.mesh_faces}, {"sha256", f.mesh_sha256}}}};
-  json patches = json::array(), lines = json::array(), groups = json::array(), adjacency = json::array();
+  json lines = json::array(), groups = json::array(), adjacency = json::array();
+  // A patch's faces stay where they are: print() takes them from the patch.
+  std::vector<json> patches;
   for (const auto& p : f.patches)
-    patches.push_back({{"id", p.id}, {"faces", p.faces}, {"area", p.area}, {"rms", p.rms},
+    patches.push_back({{"id", p.id}, {"faces", json::array()}, {"area", p.area}, {"rms", p.rms},
                        {"shape", shape_json(p.shape)}, {"attributes", attributes_json(p.attributes)}});
   for (const auto& l : f.lines)
     lines.push_back({{"id", l.id}, {"vertices", l.vertices}, {"closed", l.closed}, {"rms", l.rms},
@@ -234,16 +253,30 @@ std::string to_json_text(const FeatureSet& f) {
     groups.push_back(std::move(j));
   }
   for (const auto& [a, b] : f.adjacency) adjacency.push_back({a, b});
-  doc["patches"] = std::move(patches);
   doc["lines"] = std::move(lines);
   doc["groups"] = std::move(groups);
   doc["adjacency"] = std::move(adjacency);
+  // The patches, most of the text (their faces), each printed on its own, side by side.
+  std::vector<std::string> parts(patches.size());
+  tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t k) {
+    parts[k] = "\n  ";
+    parts[k].reserve(8 * f.patches[k].faces.size() + 4096);
+    print(patches[k], 2, parts[k], &f.patches[k].faces);
+  });
+  std::size_t size = 1 << 16;
+  for (const std::string& part : parts) size += part.size() + 1;
   std::string text;
-  std::size_t indices = 0;
-  for (const auto& p : f.patches) indices += p.faces.size();
-  text.reserve(8 * indices + (1 << 20));  // (growing it by doubling copied and faulted in 50 MB)
+  text.reserve(size);
   print(doc, 0, text);
-  text += '\n';
+  // "patches" sorts after every other key of the document: the object is reopened for it.
+  text.resize(text.size() - 2);  // "\n}"
+  text += ",\n \"patches\": [";
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    if (k > 0) text += ',';
+    text += parts[k];
+  }
+  text += parts.empty() ? "]" : "\n ]";
+  text += "\n}\n";
   return text;
 }
 

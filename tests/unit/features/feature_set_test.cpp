@@ -91,6 +91,9 @@ TEST(FeatureSetJson, ListsOfNumbersAndNamesTakeOneLine) {
   EXPECT_NE(text.find("\"area\": 0.1,"), std::string::npos) << text;
   EXPECT_NE(text.find("\n \"patches\": [\n  {\n   \"area\""), std::string::npos) << text;
   EXPECT_EQ(text.back(), '\n');
+  const std::string none = to_json_text(FeatureSet{});  // the patches' list is printed on its own
+  EXPECT_NE(none.find("\n \"patches\": []\n}\n"), std::string::npos) << none;
+  EXPECT_TRUE(json::parse(none)["patches"].empty());
 }
 
 TEST(FeatureSetJson, EveryConstraintNameRoundTrips) {
