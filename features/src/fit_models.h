@@ -4,6 +4,7 @@
 // differences.
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include <Eigen/Dense>
 
@@ -44,6 +45,22 @@ struct SphereModel {
   }
 };
 
+/// The samples by coordinate, for the axis models' passes (two samples per instruction). Made once
+/// per sample set and shared by the models refined on it: a cone's nine starts each copied them.
+struct SampleColumns {
+  explicit SampleColumns(const Normalized& samples) {
+    const int m = samples.size();
+    x.resize(m), y.resize(m), z.resize(m), sw.resize(m);
+    for (int i = 0; i < m; ++i) {
+      x[i] = samples.p[i].x();
+      y[i] = samples.p[i].y();
+      z[i] = samples.p[i].z();
+      sw[i] = samples.sw[i];
+    }
+  }
+  Eigen::ArrayXd x, y, z, sw;
+};
+
 /// Cylinder (theta fixed at 0) or cone around the axis through p along a: in the half plane of a
 /// sample, (h, rho) = (along the axis from p, away from it), the surface is the line through
 /// (0, r) at angle theta from the axis; the residual is the signed distance to that line. Unlike
@@ -60,19 +77,13 @@ struct AxisModel {
   double r, theta;
   Eigen::Matrix<double, 3, 2> uv;
 
+  /// On `columns`, which must be those of `samples`.
+  AxisModel(const Normalized& samples, std::shared_ptr<const SampleColumns> columns, const Vector3d& axis,
+            const Vector3d& point, double radius, double angle)
+      : s(&samples), a(axis.normalized()), p(point), r(radius), theta(angle), uv(perpendicular_frame(a)),
+        columns_(std::move(columns)), x_(columns_->x), y_(columns_->y), z_(columns_->z), sw_(columns_->sw) {}
   AxisModel(const Normalized& samples, const Vector3d& axis, const Vector3d& point, double radius, double angle)
-      : s(&samples), a(axis.normalized()), p(point), r(radius), theta(angle), uv(perpendicular_frame(a)) {
-    // The samples by coordinate: the passes below run two samples per instruction (each lane
-    // does the arithmetic the per-sample loop did, in the same order, so the values are equal).
-    const int m = samples.size();
-    x_.resize(m), y_.resize(m), z_.resize(m), sw_.resize(m);
-    for (int i = 0; i < m; ++i) {
-      x_[i] = samples.p[i].x();
-      y_[i] = samples.p[i].y();
-      z_[i] = samples.p[i].z();
-      sw_[i] = samples.sw[i];
-    }
-  }
+      : AxisModel(samples, std::make_shared<const SampleColumns>(samples), axis, point, radius, angle) {}
 
   void moved(const Vec& d, Vector3d& a2, Vector3d& p2, double& r2, double& t2) const {
     a2 = tilt(a, uv, d[0], d[1]);
@@ -137,7 +148,13 @@ struct AxisModel {
     rho_ = ((wx_.square() + wy_.square()) + wz_.square()).sqrt();
   }
 
-  Array x_, y_, z_, sw_;
+  // The samples by coordinate: the passes above run two samples per instruction (each lane does
+  // the arithmetic the per-sample loop did, in the same order, so the values are equal).
+  std::shared_ptr<const SampleColumns> columns_;
+  const Array& x_;
+  const Array& y_;
+  const Array& z_;
+  const Array& sw_;
   // The last residual pass's geometry, reused by the Jacobian at the parameters it was for.
   mutable Array h_, wx_, wy_, wz_, rho_;
   mutable Vec last_ = Vec::Constant(std::numeric_limits<double>::quiet_NaN());

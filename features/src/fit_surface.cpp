@@ -2,6 +2,7 @@
 // estimates, then Levenberg–Marquardt on the geometric distance in normalised coordinates).
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include <tbb/parallel_for.h>
@@ -182,9 +183,10 @@ bool refine_best(const Normalized& s, const std::vector<AxisStart>& starts, Axis
   // small region's shape choice), then the best taken in start order as one loop would.
   std::vector<double> costs(starts.size());
   std::vector<AxisStart> refined(starts.size());
+  const auto columns = std::make_shared<const fit::SampleColumns>(coarse);
   tbb::parallel_for(std::size_t{0}, starts.size(), [&](std::size_t i) {
     const AxisStart& st = starts[i];
-    Model m(coarse, st.a, st.p, st.r, st.theta);
+    Model m(coarse, columns, st.a, st.p, st.r, st.theta);
     costs[i] = fit::levenberg_marquardt(m, kCoarseIterations);
     refined[i] = {m.a, m.p, m.r, m.theta};
   });
