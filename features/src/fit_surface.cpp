@@ -33,6 +33,7 @@ Normalized thin(const Normalized& s, int max) {
   Normalized out;
   out.center = s.center;
   out.scale = s.scale;
+  out.p.reserve(max), out.n.reserve(max), out.w.reserve(max), out.sw.reserve(max);
   const double step = static_cast<double>(s.size()) / max;
   for (int k = 0; k < max; ++k) {
     const int i = static_cast<int>(k * step);

@@ -164,6 +164,7 @@ bool normalize(const Samples& s, int min_count, Normalized& out, int max_samples
   out = Normalized{};
   out.center = c;
   out.scale = scale;
+  out.p.reserve(pick.size()), out.n.reserve(pick.size()), out.w.reserve(pick.size()), out.sw.reserve(pick.size());
   double wpick = 0;
   int pick_positive = 0;
   for (std::size_t i : pick) {
