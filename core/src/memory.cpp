@@ -47,13 +47,14 @@ HeapWarmer::HeapWarmer(std::size_t bytes) {
   if (free_pages > 0 && page > 0) bytes = std::min(bytes, static_cast<std::size_t>(free_pages) * page / 2);
   if (bytes == 0) return;
   // Measured on this VM, 400 MB: 1.0–1.3 s of first writes to 4 KB pages, 0.06 + 0.47 s when
-  // populated first (the hypervisor still sees each page's first write), 0.03–0.06 s for 2 MB
-  // pages populated (0.4–0.6 s when the kernel had to compact memory for them first).
+  // populated first (the hypervisor still sees each page's first write), 0.03 s for 2 MB pages
+  // populated from memory a process freed a moment before, 0.4–0.7 s after a few seconds
+  // without a run (the host backs them afresh; no slower than 4 KB pages then).
   if (transparent_huge_pages()) {
     // Twice the block asks for 2 MB pages, as address space only: what the caller's heap grows
     // into past the estimate then faults in 2 MB at a time as well (the features stage on the
-    // anchor: 31 k page faults with the block alone, 11 k so). Populating only maps pages and
-    // writes nothing, so malloc may hand the block out at once.
+    // anchor, when this was added: 31 k page faults with the block alone, 11 k so). Populating
+    // only maps pages and writes nothing, so malloc may hand the block out at once.
     char* reserve = static_cast<char*>(std::malloc(2 * bytes));
     if (reserve && advise_huge_pages(reserve, 2 * bytes)) {
       block_ = reserve;

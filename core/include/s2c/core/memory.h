@@ -21,10 +21,11 @@ void reuse_freed_memory();
 /// file), a chunk at a time. With reuse_freed_memory() the block stays in malloc's free lists, so
 /// the arrays allocated next get pages that are already backed. What a million-vertex mesh's
 /// analysis would spend on first touches runs beside the parse of its file instead (bench/README,
-/// "features: the file read", "the binary PLY reader" and "2 MB pages").
+/// "features: the file read", "the binary PLY reader" and "2 MB pages and 100 MB less").
 ///
 /// Where the kernel offers transparent huge pages (mode `always` or `madvise`), the block is
-/// asked for 2 MB pages: one fault per 2 MB instead of 512, 30 times cheaper on this VM. Mapping
+/// asked for 2 MB pages: one fault per 2 MB instead of 512 (on this VM 30 times cheaper when the
+/// runs come one after another, as cheap as 4 KB pages after a pause). Mapping
 /// them needs no write to the memory, so the block goes back to malloc at once and the caller's
 /// own arrays (the file's) already land in it while the toucher maps it. Otherwise the toucher
 /// writes a byte per 4 KB page, and the block is freed in the destructor, which also faults in
