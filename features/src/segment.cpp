@@ -14,7 +14,6 @@
 #include <tbb/parallel_invoke.h>
 
 #include "fit_util.h"
-#include "s2c/core/disjoint_sets.h"
 
 namespace s2c::features {
 namespace {
@@ -341,10 +340,6 @@ Fit choose_shape(const Samples& s, const SegmentParams& p) { return choose_shape
 
 namespace {
 
-/// Splits a region no single primitive fits (a cylinder running tangentially into a hemisphere,
-/// noisy creases the flood fill leaked through) by fit-driven region growing: from a seed face,
-/// fit the simplest shape to its neighbourhood, grow over faces within tolerance of that shape,
-/// refit as it grows, carve it out, repeat on the rest.
 /// Per-face state of the splits, over the whole mesh, shared by the regions split side by side:
 /// each split reads and writes only the entries of its own region's faces (hash maps of a
 /// region's faces cost more than the fits on million-face regions; arrays of its own per region
@@ -355,6 +350,11 @@ struct SplitState {
   std::vector<int> stamp;  ///< faces visited by a region's current search: stamp == its epoch
 };
 
+/// Splits a region no single primitive fits (a cylinder running tangentially into a hemisphere,
+/// noisy creases the flood fill leaked through) by fit-driven region growing: from a seed face,
+/// fit the simplest shape to its neighbourhood, grow over faces within tolerance of that shape,
+/// refit as it grows, carve it out, repeat on the rest. `faces` are the faces f with
+/// face_region[f] == region.
 std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals,
                                  const std::vector<VertexTensor>& tensors, const std::vector<int>& face_region,
                                  int region, const std::vector<int>& faces, const SegmentParams& p,
