@@ -132,8 +132,9 @@ int face_across_side(const MeshArrays& m, int f, int i) {
 }
 
 /// Whether the faces of vertex v form one fan (a disk, or a half-disk at a boundary): walking from
-/// one face across the sides at v reaches all of them. Needs the edges.
-bool one_fan(const MeshArrays& m, int v) {
+/// one face across the sides at v reaches all of them. `across[f][i]` is the face across side i
+/// of f (kNoFace on a boundary): one lookup per step, where the edge arrays took two.
+bool one_fan(const MeshArrays& m, const std::vector<std::array<int, 3>>& across, int v) {
   const int count = m.vf_start[v + 1] - m.vf_start[v];
   if (count == 0) return true;
   const int start = m.vf[m.vf_start[v]];
@@ -143,7 +144,7 @@ bool one_fan(const MeshArrays& m, int v) {
   for (int step : {0, 2}) {
     int f = start;
     while (reached <= count) {
-      const int g = m.across(m.face_edges[f][(corner_of(m, f, v) + step) % 3], f);
+      const int g = across[f][(corner_of(m, f, v) + step) % 3];
       if (g < 0) break;
       if (g == start) return reached == count;
       f = g;
@@ -251,7 +252,7 @@ bool add_manifold_edges(MeshArrays& m) {
   });
   std::atomic<bool> fans{true};
   tbb::parallel_for(0, nv, [&](int v) {
-    if (!one_fan(m, v)) fans = false;
+    if (!one_fan(m, across, v)) fans = false;
   });
   return fans;
 }
