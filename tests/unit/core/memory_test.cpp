@@ -106,7 +106,8 @@ TEST(Memory, HeapWarmerUsesHugePagesWhereTheKernelHasThem) {
     huge = warm.huge_pages();
   }
   ASSERT_TRUE(huge);
-  // At least half of it: the kernel may be short of free 2 MB blocks.
-  EXPECT_GT(anon_huge_kb() - before, static_cast<long>(kBytes / 1024 / 2));
+  // At least an eighth of it: the kernel may be short of free 2 MB blocks (without the advice
+  // there are none at all in `madvise` mode).
+  EXPECT_GT(anon_huge_kb() - before, static_cast<long>(kBytes / 1024 / 8));
   EXPECT_LT(faults_to_fill(kBytes / 2), static_cast<long>(kBytes / 4096 / 20));
 }
