@@ -81,7 +81,7 @@ struct AxisModel {
   AxisModel(const Normalized& samples, std::shared_ptr<const SampleColumns> columns, const Vector3d& axis,
             const Vector3d& point, double radius, double angle)
       : s(&samples), a(axis.normalized()), p(point), r(radius), theta(angle), uv(perpendicular_frame(a)),
-        columns_(std::move(columns)), x_(columns_->x), y_(columns_->y), z_(columns_->z), sw_(columns_->sw) {}
+        columns_(std::move(columns)) {}
   AxisModel(const Normalized& samples, const Vector3d& axis, const Vector3d& point, double radius, double angle)
       : AxisModel(samples, std::make_shared<const SampleColumns>(samples), axis, point, radius, angle) {}
 
@@ -98,7 +98,7 @@ struct AxisModel {
     moved(d, a2, p2, r2, t2);
     geometry(a2, p2);
     const double ct = std::cos(t2), st = std::sin(t2);
-    out.array() = sw_ * ((rho_ - r2) * ct - h_ * st);
+    out.array() = columns_->sw * ((rho_ - r2) * ct - h_ * st);
     last_ = d;
     at_current_ = false;  // they are at the moved parameters until update(d) moves there
   }
@@ -114,9 +114,10 @@ struct AxisModel {
     // each lane is the arithmetic of its entry alone, in the order the per-entry array passes
     // had (their eight temporaries cost a malloc each per iteration).
     const Eigen::Array2d ex(u.x(), t.x()), ey(u.y(), t.y()), ez(u.z(), t.z());
-    for (Eigen::Index i = 0; i < x_.size(); ++i) {
-      const double vx = x_[i] - p.x(), vy = y_[i] - p.y(), vz = z_[i] - p.z();
-      const double rho = rho_[i], h = h_[i], sw = sw_[i];
+    const SampleColumns& c = *columns_;
+    for (Eigen::Index i = 0; i < c.x.size(); ++i) {
+      const double vx = c.x[i] - p.x(), vy = c.y[i] - p.y(), vz = c.z[i] - p.z();
+      const double rho = rho_[i], h = h_[i], sw = c.sw[i];
       // (w·u, w·t)/rho; on the axis the distance is not differentiable, any direction is a
       // subgradient.
       Eigen::Array2d w = ((wx_[i] * ex + wy_[i] * ey) + wz_[i] * ez) / rho;
@@ -140,7 +141,8 @@ struct AxisModel {
   /// Per sample, for the axis through q along b: h = b·v and w = v − h b with v = sample − q,
   /// rho = |w| (Eigen's 3-vector dot product and norm: (x + y) + z).
   void geometry(const Vector3d& b, const Vector3d& q) const {
-    const auto vx = x_ - q.x(), vy = y_ - q.y(), vz = z_ - q.z();
+    const SampleColumns& c = *columns_;
+    const auto vx = c.x - q.x(), vy = c.y - q.y(), vz = c.z - q.z();
     h_ = (vx * b.x() + vy * b.y()) + vz * b.z();
     wx_ = vx - h_ * b.x();
     wy_ = vy - h_ * b.y();
@@ -151,10 +153,6 @@ struct AxisModel {
   // The samples by coordinate: the passes above run two samples per instruction (each lane does
   // the arithmetic the per-sample loop did, in the same order, so the values are equal).
   std::shared_ptr<const SampleColumns> columns_;
-  const Array& x_;
-  const Array& y_;
-  const Array& z_;
-  const Array& sw_;
   // The last residual pass's geometry, reused by the Jacobian at the parameters it was for.
   mutable Array h_, wx_, wy_, wz_, rho_;
   mutable Vec last_ = Vec::Constant(std::numeric_limits<double>::quiet_NaN());
