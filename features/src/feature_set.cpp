@@ -28,19 +28,8 @@ constexpr const char* kConstraintNames[] = {"equal_length", "connected",     "co
 /// True for a value printed in one piece: not an object, not an array.
 bool scalar(const json& j) { return !j.is_object() && !j.is_array(); }
 
-/// Appends a scalar as dump() does; integers straight to digits (the face lists: millions).
-void print_scalar(const json& j, std::string& out) {
-  char digits[24];
-  if (const auto* u = j.get_ptr<const json::number_unsigned_t*>()) {
-    out.append(digits, std::to_chars(digits, digits + sizeof digits, *u).ptr);
-  } else if (const auto* i = j.get_ptr<const json::number_integer_t*>()) {
-    out.append(digits, std::to_chars(digits, digits + sizeof digits, *i).ptr);
-  } else {
-    out += j.dump();
-  }
-}
-
-/// Appends face indices as print() appends an array of integers.
+/// Appends face indices as print() appends an array of integers, straight to digits (a
+/// million-face part's patches hold two million of them; they are not in the JSON tree).
 void print_indices(const std::vector<int>& indices, std::string& out) {
   out += '[';
   char digits[16];
@@ -89,7 +78,7 @@ void print(const json& j, int depth, std::string& out, const std::vector<int>* f
     if (!flat) newline(depth);
     out += ']';
   } else {
-    print_scalar(j, out);
+    out += j.dump();
   }
 }
 
