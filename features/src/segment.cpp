@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -14,6 +13,7 @@
 #include <tbb/parallel_invoke.h>
 
 #include "fit_util.h"
+#include "s2c/core/disjoint_sets.h"
 
 namespace s2c::features {
 namespace {
@@ -59,47 +59,25 @@ bool sharp_edge(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals
 }
 
 /// Connected components of `faces` (a mask) across non-sharp edges, each in face order, ordered
-/// by their first face. The edges are united on all cores (a union-find whose roots change by
-/// compare-and-swap, a root always linked to a smaller one), which gives the components a
-/// sequential walk gives: they depend only on which faces are joined.
+/// by their first face. The edges are united on all cores (ConcurrentDisjointSets), which gives
+/// the components a sequential walk gives: they depend only on which faces are joined.
 std::vector<std::vector<int>> flood_fill(const MeshArrays& m, const std::vector<char>& sharp,
                                          const std::vector<char>& usable) {
   const int nf = m.faces();
-  std::vector<std::atomic<int>> parent(nf);
-  tbb::parallel_for(0, nf, [&](int f) { parent[f].store(f, std::memory_order_relaxed); });
-  auto find = [&](int x) {
-    for (;;) {
-      const int p = parent[x].load(std::memory_order_relaxed);
-      if (p == x) return x;
-      const int gp = parent[p].load(std::memory_order_relaxed);
-      if (gp != p) {  // path halving; if another thread moved x on meanwhile, its value stands
-        int expected = p;
-        parent[x].compare_exchange_weak(expected, gp, std::memory_order_relaxed);
-      }
-      x = gp;
-    }
-  };
+  ConcurrentDisjointSets sets(nf);
   tbb::parallel_for(tbb::blocked_range<int>(0, static_cast<int>(m.edges.size()), 16384),
                     [&](const tbb::blocked_range<int>& r) {
                       for (int e = r.begin(); e < r.end(); ++e) {
                         const auto& E = m.edges[e];
-                        if (sharp[e] || E.f1 < 0 || !usable[E.f0] || !usable[E.f1]) continue;
-                        for (int a = E.f0, b = E.f1;;) {
-                          a = find(a), b = find(b);
-                          if (a == b) break;
-                          if (a < b) std::swap(a, b);
-                          int expected = a;  // a is a root unless another thread linked it meanwhile
-                          if (parent[a].compare_exchange_strong(expected, b, std::memory_order_relaxed)) break;
-                        }
+                        if (!sharp[e] && E.f1 >= 0 && usable[E.f0] && usable[E.f1]) sets.unite(E.f0, E.f1);
                       }
                     });
-  // Every face straight to its root (a find meanwhile still only meets ancestors).
-  tbb::parallel_for(0, nf, [&](int f) { parent[f].store(find(f), std::memory_order_relaxed); });
+  tbb::parallel_for(0, nf, [&](int f) { sets.flatten(f); });
   std::vector<int> index(nf, -1);  // component of each root (roots are face ids)
   std::vector<std::vector<int>> out;
   for (int f = 0; f < nf; ++f) {
     if (!usable[f]) continue;
-    int& k = index[parent[f].load(std::memory_order_relaxed)];
+    int& k = index[sets.find(f)];
     if (k < 0) {
       k = static_cast<int>(out.size());
       out.emplace_back();
