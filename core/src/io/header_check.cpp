@@ -90,9 +90,9 @@ void check_ascii_ply_lists(const fs::path& p, std::uint64_t header_lines) {
       for (const PlyProperty& prop : e.properties) {
         if (!next()) return;  // too few records: the record count check has said so
         if (!prop.list) continue;
-        const std::uint64_t max = prop.count_type == PlyType::uint8 || prop.count_type == PlyType::int8     ? 0xFFu
-                                  : prop.count_type == PlyType::uint16 || prop.count_type == PlyType::int16 ? 0xFFFFu
-                                                                                                            : 0xFFFFFFFFu;
+        // The largest count its type holds: 0xFF, 0xFFFF, or 0xFFFFFFFF from 4 bytes on.
+        const int size = ply_size(prop.count_type);
+        const std::uint64_t max = size < 4 ? (std::uint64_t{1} << (8 * size)) - 1 : 0xFFFFFFFFu;
         char* end = nullptr;
         errno = 0;
         const unsigned long long n = std::strtoull(tok.c_str(), &end, 10);

@@ -205,6 +205,16 @@ TEST(MeshIo, PlyListsAreCheckedBeforeOpenMeshReadsThem) {
   wide.replace(wide.find("3 0 2 3"), 1, "4000000000");
   write_text(dir / "wide.ply", wide);
   expect_invalid(dir / "wide.ply", "face 1 of 2 ends inside its list 'vertex_indices' (3 values of 4000000000)");
+  // A length past what its type holds: 256 for uchar, 65536 for ushort.
+  std::string byte_length = kAsciiPly;
+  byte_length.replace(byte_length.find("3 0 2 3"), 1, "256");
+  write_text(dir / "byte_length.ply", byte_length);
+  expect_invalid(dir / "byte_length.ply", "has the length '256', not a count of 0 to 255");
+  std::string short_length = kAsciiPly;
+  short_length.replace(short_length.find("list uchar int"), 14, "list ushort int");
+  short_length.replace(short_length.find("3 0 2 3"), 1, "65536");
+  write_text(dir / "short_length.ply", short_length);
+  expect_invalid(dir / "short_length.ply", "has the length '65536', not a count of 0 to 65535");
 }
 
 TEST(MeshIo, EmptyMeshesAndPointClouds) {
