@@ -188,33 +188,29 @@ TEST(MeshIo, AbsurdHeaderCountsAreRejectedBeforeAllocating) {
 // A list property without a name sent it into a loop too.
 TEST(MeshIo, PlyListsAreCheckedBeforeOpenMeshReadsThem) {
   const auto dir = scratch_dir();
-  std::string huge = kAsciiPly;
-  huge.replace(huge.find("3 0 2 3"), 1, "34444444444444444");
-  write_text(dir / "huge.ply", huge);
-  expect_invalid(dir / "huge.ply", "line 15: face 1: list 'vertex_indices' has the length '34444444444444444'");
-  std::string negative = kAsciiPly;
-  negative.replace(negative.find("3 0 2 3"), 1, "-3");
-  write_text(dir / "negative.ply", negative);
-  expect_invalid(dir / "negative.ply", "has the length '-3'");
+  // kAsciiPly with its face list declared as `list` and the length of face 1 as `length`.
+  auto with_length = [](const std::string& length, const std::string& list = "list uchar int") {
+    std::string text = kAsciiPly;
+    text.replace(text.find("list uchar int"), 14, list);
+    text.replace(text.find("3 0 2 3"), 1, length);
+    return text;
+  };
+  auto refused = [&](const char* name, const std::string& text, const std::string& message) {
+    write_text(dir / name, text);
+    expect_invalid(dir / name, message);
+  };
+  refused("huge.ply", with_length("34444444444444444"),
+          "line 15: face 1: list 'vertex_indices' has the length '34444444444444444'");
+  refused("negative.ply", with_length("-3"), "has the length '-3'");
   std::string unnamed = binary_ply_triangle();
   unnamed.replace(unnamed.find(" vertex_indices"), 15, "");
-  write_text(dir / "unnamed.ply", unnamed);
-  expect_invalid(dir / "unnamed.ply", "header line 8: the list property has no name");
-  std::string wide = kAsciiPly;
-  wide.replace(wide.find("list uchar int"), 14, "list uint int");
-  wide.replace(wide.find("3 0 2 3"), 1, "4000000000");
-  write_text(dir / "wide.ply", wide);
-  expect_invalid(dir / "wide.ply", "face 1 of 2 ends inside its list 'vertex_indices' (3 values of 4000000000)");
+  refused("unnamed.ply", unnamed, "header line 8: the list property has no name");
+  refused("wide.ply", with_length("4000000000", "list uint int"),
+          "face 1 of 2 ends inside its list 'vertex_indices' (3 values of 4000000000)");
   // A length past what its type holds: 256 for uchar, 65536 for ushort.
-  std::string byte_length = kAsciiPly;
-  byte_length.replace(byte_length.find("3 0 2 3"), 1, "256");
-  write_text(dir / "byte_length.ply", byte_length);
-  expect_invalid(dir / "byte_length.ply", "has the length '256', not a count of 0 to 255");
-  std::string short_length = kAsciiPly;
-  short_length.replace(short_length.find("list uchar int"), 14, "list ushort int");
-  short_length.replace(short_length.find("3 0 2 3"), 1, "65536");
-  write_text(dir / "short_length.ply", short_length);
-  expect_invalid(dir / "short_length.ply", "has the length '65536', not a count of 0 to 65535");
+  refused("byte_length.ply", with_length("256"), "has the length '256', not a count of 0 to 255");
+  refused("short_length.ply", with_length("65536", "list ushort int"),
+          "has the length '65536', not a count of 0 to 65535");
 }
 
 TEST(MeshIo, EmptyMeshesAndPointClouds) {
