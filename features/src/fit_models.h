@@ -8,6 +8,7 @@
 
 #include <Eigen/Dense>
 
+#include "axis_passes.h"
 #include "fit_util.h"
 
 namespace s2c::features::fit {
@@ -96,11 +97,34 @@ struct AxisModel {
     Vector3d a2, p2;
     double r2, t2;
     moved(d, a2, p2, r2, t2);
-    geometry(a2, p2);
     const double ct = std::cos(t2), st = std::sin(t2);
-    out.array() = columns_->sw * ((rho_ - r2) * ct - h_ * st);
+    if (avx) {
+      resize_geometry();
+      axis_residuals_avx(columns(), p2.data(), a2.data(), r2, ct, st, geometry_arrays(), out.data());
+    } else {
+      geometry(a2, p2);
+      out.array() = columns_->sw * ((rho_ - r2) * ct - h_ * st);
+    }
     last_ = d;
     at_current_ = false;  // they are at the moved parameters until update(d) moves there
+  }
+  /// JᵀJ and Jᵀres of the Jacobian at the current parameters (see jacobian()), each entry summed
+  /// over the samples in order: with AVX straight from the geometry, without storing J.
+  void normal_equations(const Eigen::VectorXd& res, Eigen::Matrix<double, K, K>& A, Vec& g) const {
+    if (!avx) {
+      jacobian_.resize(s->size(), K);
+      jacobian(jacobian_);
+      fit::normal_equations<K>(jacobian_.data(), res.data(), s->size(), A, g);
+      return;
+    }
+    if (!at_current_) {
+      resize_geometry();
+      axis_residuals_avx(columns(), p.data(), a.data(), r, 0.0, 0.0, geometry_arrays(), nullptr);
+      at_current_ = true;
+    }
+    const Vector3d u = uv.col(0), t = uv.col(1);
+    axis_normal_equations_avx(K, columns(), geometry_arrays(), p.data(), u.data(), t.data(), r, std::cos(theta),
+                              std::sin(theta), res.data(), A.data(), g.data());
   }
   /// At delta = 0 the tilts move a along u and v (they are perpendicular to it), the shifts move p
   /// along them; with w = v − h a (length rho, perpendicular to a): ∂h/∂tilt_u = u·v,
@@ -137,7 +161,20 @@ struct AxisModel {
     at_current_ = d == last_;  // moved() gives the same a and p as that residual pass did
   }
 
+  /// The passes four samples at a time (axis_passes.h) where the CPU has AVX; the tests turn them
+  /// off to compare with the two-lane passes below.
+  bool avx = have_avx_passes();
+
  private:
+  AxisColumns columns() const {
+    const SampleColumns& c = *columns_;
+    return {c.x.data(), c.y.data(), c.z.data(), c.sw.data(), static_cast<int>(c.x.size())};
+  }
+  AxisGeometry geometry_arrays() const { return {h_.data(), wx_.data(), wy_.data(), wz_.data(), rho_.data()}; }
+  void resize_geometry() const {
+    const Eigen::Index m = columns_->x.size();
+    h_.resize(m), wx_.resize(m), wy_.resize(m), wz_.resize(m), rho_.resize(m);
+  }
   /// Per sample, for the axis through q along b: h = b·v and w = v − h b with v = sample − q,
   /// rho = |w| (Eigen's 3-vector dot product and norm: (x + y) + z).
   void geometry(const Vector3d& b, const Vector3d& q) const {
@@ -155,6 +192,7 @@ struct AxisModel {
   std::shared_ptr<const SampleColumns> columns_;
   // The last residual pass's geometry, reused by the Jacobian at the parameters it was for.
   mutable Array h_, wx_, wy_, wz_, rho_;
+  mutable Jacobian<K> jacobian_;  // the two-lane path's, for normal_equations()
   mutable Vec last_ = Vec::Constant(std::numeric_limits<double>::quiet_NaN());
   mutable bool at_current_ = false;
 };

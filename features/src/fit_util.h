@@ -9,6 +9,8 @@
 #include <utility>
 #include <vector>
 
+#include <emmintrin.h>
+
 #include <Eigen/Dense>
 
 #include "s2c/features/shape.h"
@@ -95,6 +97,56 @@ struct has_jacobian<Model, std::void_t<decltype(std::declval<const Model&>().jac
                                std::declval<Jacobian<Model::kParams>&>()))>>
     : std::true_type {};
 
+/// JᵀJ into A and Jᵀr into g for the m rows of J (row-major, K columns), each entry summed over
+/// the rows in order. Only the lower triangle is summed, in packets of two neighbouring entries of
+/// one matrix row: (J_ia J_ib, J_ia J_ib+1) is J_ia times two neighbouring entries of the row, one
+/// unaligned load. The twelve packets of K = 6, and g's three, stay in registers (the whole outer
+/// product took eighteen, and spilled to the stack on every row). The upper triangle is copied
+/// from the lower: J_ia J_ib and J_ib J_ia are the same product, so A is what the full sums give.
+template <int K>
+void normal_equations(const double* J, const double* r, int m, Eigen::Matrix<double, K, K>& A,
+                      Eigen::Matrix<double, K, 1>& g) {
+  static_assert(K >= 1 && K <= 8, "a model with a handful of parameters");
+  constexpr int kPairs = (K + 1) / 2;
+  // The pair of row entries (b, b + 1); the last alone when K is odd (its neighbour is the next
+  // row's first entry, or past the end of J).
+  auto pair = [](const double* row, int b) { return b + 1 < K ? _mm_loadu_pd(row + b) : _mm_load_sd(row + b); };
+  __m128d acc[K][kPairs], gacc[kPairs];
+  for (int a = 0; a < K; ++a)
+    for (int j = 0; j < kPairs; ++j) acc[a][j] = _mm_setzero_pd();
+  for (int j = 0; j < kPairs; ++j) gacc[j] = _mm_setzero_pd();
+  for (int i = 0; i < m; ++i) {
+    const double* row = J + static_cast<std::ptrdiff_t>(i) * K;
+    const __m128d ri = _mm_set1_pd(r[i]);
+    for (int j = 0; j < kPairs; ++j) gacc[j] = _mm_add_pd(gacc[j], _mm_mul_pd(pair(row, 2 * j), ri));
+    for (int a = 0; a < K; ++a) {
+      const __m128d ra = _mm_set1_pd(row[a]);
+      for (int j = 0; 2 * j <= a; ++j) acc[a][j] = _mm_add_pd(acc[a][j], _mm_mul_pd(ra, pair(row, 2 * j)));
+    }
+  }
+  alignas(16) double out[2];
+  for (int a = 0; a < K; ++a)
+    for (int j = 0; 2 * j <= a; ++j) {
+      _mm_store_pd(out, acc[a][j]);
+      for (int t = 0; t < 2 && 2 * j + t <= a; ++t) A(a, 2 * j + t) = A(2 * j + t, a) = out[t];
+    }
+  for (int j = 0; j < kPairs; ++j) {
+    _mm_store_pd(out, gacc[j]);
+    for (int t = 0; t < 2 && 2 * j + t < K; ++t) g[2 * j + t] = out[t];
+  }
+}
+
+/// True when Model has `void normal_equations(const Eigen::VectorXd& r, Matrix<k, k>& A, Vector<k>& g)
+/// const`: JᵀJ and Jᵀr of its analytic Jacobian at delta = 0, summed as normal_equations() sums.
+template <class Model, class = void>
+struct has_normal_equations : std::false_type {};
+template <class Model>
+struct has_normal_equations<
+    Model, std::void_t<decltype(std::declval<const Model&>().normal_equations(
+               std::declval<const Eigen::VectorXd&>(),
+               std::declval<Eigen::Matrix<double, Model::kParams, Model::kParams>&>(),
+               std::declval<Eigen::Matrix<double, Model::kParams, 1>&>()))>> : std::true_type {};
+
 /// Minimises Σ r_i² with Levenberg–Marquardt (the model's analytic Jacobian when it has one, a
 /// forward-difference Jacobian otherwise: k more residual passes per iteration). The model holds its
 /// current parameters and is re-based after each accepted step, so a parameterisation local to
@@ -111,7 +163,7 @@ double levenberg_marquardt(Model& model, int max_iterations = kMaxIterations) {
   using Mat = Eigen::Matrix<double, k, k>;
   const int m = model.residual_count();
   Eigen::VectorXd r(m), r_try(m);
-  Jacobian<k> J(m, k);
+  Jacobian<k> J(has_normal_equations<Model>::value ? 0 : m, k);
   model.residuals(Vec::Zero(), r);
   double cost = r.squaredNorm();
   if (!std::isfinite(cost)) return cost;
@@ -119,27 +171,22 @@ double levenberg_marquardt(Model& model, int max_iterations = kMaxIterations) {
   [[maybe_unused]] constexpr double h = 1e-7;
   double lambda = 1e-3;
   for (int it = 0; it < max_iterations && cost > 1e-28; ++it) {
-    if constexpr (has_jacobian<Model>::value) {
-      model.jacobian(J);
+    Mat A;
+    Vec g;
+    if constexpr (has_normal_equations<Model>::value) {
+      model.normal_equations(r, A, g);
     } else {
-      for (int j = 0; j < k; ++j) {
-        Vec d = Vec::Zero();
-        d[j] = h;
-        model.residuals(d, r_try);
-        J.col(j) = (r_try - r) / h;
+      if constexpr (has_jacobian<Model>::value) {
+        model.jacobian(J);
+      } else {
+        for (int j = 0; j < k; ++j) {
+          Vec d = Vec::Zero();
+          d[j] = h;
+          model.residuals(d, r_try);
+          J.col(j) = (r_try - r) / h;
+        }
       }
-    }
-    // Normal equations accumulated row by row (k ≤ 6 columns, fixed size), lower triangle only.
-    Mat A = Mat::Zero();
-    Vec g = Vec::Zero();
-    for (int i = 0; i < m; ++i) {
-      // Straight from the Jacobian's storage: a copy of the row to the stack was stored in two
-      // halves and read back across them, stalling every row on store forwarding. The whole
-      // outer product, in packets, rather than the lower triangle entry by entry: each entry
-      // still adds row[q]·row[c] in row order, so both triangles are the sums the lower one was.
-      const Eigen::Map<const Vec> row(J.data() + static_cast<std::ptrdiff_t>(i) * k);
-      A.noalias() += row * row.transpose();
-      g.noalias() += row * r[i];
+      normal_equations<k>(J.data(), r.data(), m, A, g);
     }
     const double floor = 1e-12 * std::max(A.trace() / k, 1e-300);
     bool accepted = false, converged = false;

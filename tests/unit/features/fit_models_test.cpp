@@ -2,6 +2,7 @@
 // their own residuals: a wrong derivative would still let Levenberg–Marquardt creep downhill, so
 // only a direct comparison catches it.
 #include <algorithm>
+#include <cstring>
 #include <random>
 #include <set>
 
@@ -110,6 +111,87 @@ TEST(FitModels, LevenbergMarquardtUsesTheAnalyticJacobian) {
   }();
   const double after = levenberg_marquardt(m);
   EXPECT_LT(after, 0.05 * before);
+}
+
+/// Equal to the bit, NaN for NaN.
+template <class A, class B>
+bool same_bits(const A& a, const B& b) {
+  if (a.size() != b.size()) return false;
+  return std::memcmp(a.derived().data(), b.derived().data(), sizeof(double) * static_cast<std::size_t>(a.size())) == 0;
+}
+
+/// The axis model's passes four samples at a time (AVX) against its two-lane passes: residuals,
+/// normal equations before and after a step, and whole refinements, to the bit, for sample counts
+/// around the four-sample groups and the 32-sample blocks.
+template <class Model>
+void expect_avx_passes_give_the_same_bits(const Normalized& s) {
+  constexpr int k = Model::kParams;
+  Model avx(s, Vector3d(0.1, -0.2, 1.0), Vector3d(0.05, 0.02, 0.0), 0.75, k > 5 ? 0.25 : 0.0);
+  Model lanes = avx;
+  avx.avx = true;
+  lanes.avx = false;
+  typename Model::Vec step;
+  for (int j = 0; j < k; ++j) step[j] = 0.01 * (j + 1);
+  Eigen::VectorXd ra(s.size()), rl(s.size());
+  Eigen::Matrix<double, k, k> Aa, Al;
+  typename Model::Vec ga, gl;
+  avx.residuals(Model::Vec::Zero(), ra);
+  lanes.residuals(Model::Vec::Zero(), rl);
+  EXPECT_TRUE(same_bits(ra, rl)) << s.size() << " samples: residuals";
+  avx.normal_equations(ra, Aa, ga);
+  lanes.normal_equations(rl, Al, gl);
+  EXPECT_TRUE(same_bits(Aa, Al) && same_bits(ga, gl)) << s.size() << " samples: normal equations";
+  avx.residuals(step, ra);
+  lanes.residuals(step, rl);
+  EXPECT_TRUE(same_bits(ra, rl)) << s.size() << " samples: residuals after a step";
+  avx.update(step);  // the geometry of the residual pass is kept for the next normal equations
+  lanes.update(step);
+  avx.normal_equations(ra, Aa, ga);
+  lanes.normal_equations(rl, Al, gl);
+  EXPECT_TRUE(same_bits(Aa, Al) && same_bits(ga, gl)) << s.size() << " samples: normal equations after a step";
+  const double ca = levenberg_marquardt(avx), cl = levenberg_marquardt(lanes);
+  EXPECT_TRUE(ca == cl && avx.a == lanes.a && avx.p == lanes.p && avx.r == lanes.r && avx.theta == lanes.theta)
+      << s.size() << " samples: refinement";
+}
+
+TEST(FitModels, AvxPassesGiveTheTwoLanePassesBits) {
+  if (!have_avx_passes()) GTEST_SKIP() << "this CPU has no AVX";
+  for (const int n : {6, 7, 8, 9, 31, 32, 33, 37, 300}) {
+    const Normalized s = noisy_samples(n, 10 + n);
+    expect_avx_passes_give_the_same_bits<ConeModel>(s);
+    expect_avx_passes_give_the_same_bits<CylinderModel>(s);
+  }
+}
+
+/// fit::normal_equations against the plain sums, entry by entry in row order, to the bit.
+template <int K>
+void expect_normal_equations_are_row_sums(int m) {
+  std::mt19937 rng(K * 100 + m);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Jacobian<K> J(m, K);
+  Eigen::VectorXd r(m);
+  for (int i = 0; i < m; ++i) {
+    for (int c = 0; c < K; ++c) J(i, c) = u(rng);
+    r[i] = u(rng);
+  }
+  Eigen::Matrix<double, K, K> A, plain = Eigen::Matrix<double, K, K>::Zero();
+  Eigen::Matrix<double, K, 1> g, plain_g = Eigen::Matrix<double, K, 1>::Zero();
+  normal_equations<K>(J.data(), r.data(), m, A, g);
+  for (int i = 0; i < m; ++i)
+    for (int a = 0; a < K; ++a) {
+      for (int b = 0; b < K; ++b) plain(a, b) += J(i, a) * J(i, b);
+      plain_g[a] += J(i, a) * r[i];
+    }
+  EXPECT_TRUE(same_bits(A, plain) && same_bits(g, plain_g)) << "K = " << K << ", " << m << " rows";
+}
+
+TEST(FitUtil, NormalEquationsAreTheRowSumsInOrder) {
+  for (const int m : {1, 2, 5, 64}) {
+    expect_normal_equations_are_row_sums<3>(m);
+    expect_normal_equations_are_row_sums<4>(m);
+    expect_normal_equations_are_row_sums<5>(m);
+    expect_normal_equations_are_row_sums<6>(m);
+  }
 }
 
 }  // namespace
