@@ -83,14 +83,48 @@ void AtomicFile::commit() {
   fsync_path(dir.empty() ? fs::path(".") : dir);
 }
 
-void write_file_atomic(const fs::path& path, const std::string& content) {
-  AtomicFile out(path);
-  {
-    std::ofstream f(out.temp_path(), std::ios::binary);
-    f.write(content.data(), static_cast<std::streamsize>(content.size()));
-    f.flush();
-    if (!f) throw IoError(fmt::format("{}: write failed: {}", path.string(), std::strerror(errno)));
+AtomicStream::AtomicStream(fs::path target) : file_(std::move(target)) {
+  fd_ = ::open(file_.temp_path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw IoError(fmt::format("{}: cannot write: {}", file_.target().string(), std::strerror(errno)));
+}
+
+AtomicStream::~AtomicStream() { close_file(); }
+
+void AtomicStream::close_file() {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+}
+
+void AtomicStream::write(std::string_view piece) {
+  // Writeback in steps of this many bytes: large enough for few calls, small enough that the
+  // disk works while the rest is printed.
+  constexpr std::uint64_t kFlushStep = 4 << 20;
+  while (!piece.empty()) {
+    const ssize_t n = ::write(fd_, piece.data(), piece.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) throw IoError(fmt::format("{}: write failed: {}", file_.target().string(), std::strerror(errno)));
+    piece.remove_prefix(static_cast<std::size_t>(n));
+    written_ += static_cast<std::uint64_t>(n);
   }
+  if (written_ - flushed_ >= kFlushStep) {
+    // Only a hint: where the file system does not take it, commit's fsync does all the work.
+    ::sync_file_range(fd_, static_cast<off_t>(flushed_), static_cast<off_t>(written_ - flushed_), SYNC_FILE_RANGE_WRITE);
+    flushed_ = written_;
+  }
+}
+
+void AtomicStream::commit() {
+  const bool synced = ::fsync(fd_) == 0;
+  const int saved = errno;
+  close_file();
+  if (!synced && saved != EINVAL && saved != EROFS)  // (the two for files that cannot be synced)
+    throw IoError(fmt::format("{}: write failed: {}", file_.target().string(), std::strerror(saved)));
+  file_.commit();
+}
+
+void write_file_atomic(const fs::path& path, const std::string& content) {
+  AtomicStream out(path);
+  out.write(content);
   out.commit();
 }
 

@@ -5,12 +5,14 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <functional>
 #include <iterator>
 #include <set>
+#include <string_view>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
-#include <tbb/parallel_for.h>
+#include <tbb/parallel_pipeline.h>
 
 #include "s2c/core/errors.h"
 #include "s2c/core/files.h"
@@ -31,13 +33,20 @@ bool scalar(const json& j) { return !j.is_object() && !j.is_array(); }
 /// Appends face indices as print() appends an array of integers, straight to digits (a
 /// million-face part's patches hold two million of them; they are not in the JSON tree).
 void print_indices(const std::vector<int>& indices, std::string& out) {
-  out += '[';
-  char digits[16];
+  // Into room made for the longest numbers, then cut to what was printed: appending two
+  // separators and the digits one call at a time cost three times the printing.
+  constexpr std::size_t kMaxChars = 13;  // ", " and an int's up to eleven characters
+  const std::size_t start = out.size();
+  out.resize(start + 2 + kMaxChars * indices.size());
+  char* at = out.data() + start;
+  char* const end = out.data() + out.size();
+  *at++ = '[';
   for (std::size_t k = 0; k < indices.size(); ++k) {
-    if (k > 0) out += ", ";
-    out.append(digits, std::to_chars(digits, digits + sizeof digits, indices[k]).ptr);
+    if (k > 0) *at++ = ',', *at++ = ' ';
+    at = std::to_chars(at, end, indices[k]).ptr;
   }
-  out += ']';
+  *at++ = ']';
+  out.resize(static_cast<std::size_t>(at - out.data()));
 }
 
 /// Appends `j` as dump(1) does, except that an array of scalars goes on one line: a million-face
@@ -222,15 +231,15 @@ ConstraintKind constraint_kind(const std::string& name) {
   throw InvalidInput(fmt::format("unknown constraint kind \"{}\"", name));
 }
 
-std::string to_json_text(const FeatureSet& f) {
+namespace {
+
+/// The JSON text of `f` in pieces, in order, to `sink`. The patches, most of the text (their
+/// faces), are printed side by side while the sink takes the ones before them: writing to a file
+/// goes on while the rest is printed.
+void emit_json_text(const FeatureSet& f, const std::function<void(std::string_view)>& sink) {
   json doc = {{"format", kFormat},
               {"mesh", {{"vertices", f.mesh_vertices}, {"faces", f.mesh_faces}, {"sha256", f.mesh_sha256}}}};
   json lines = json::array(), groups = json::array(), adjacency = json::array();
-  // A patch's faces stay where they are: print() takes them from the patch.
-  std::vector<json> patches;
-  for (const auto& p : f.patches)
-    patches.push_back({{"id", p.id}, {"faces", json::array()}, {"area", p.area}, {"rms", p.rms},
-                       {"shape", shape_json(p.shape)}, {"attributes", attributes_json(p.attributes)}});
   for (const auto& l : f.lines)
     lines.push_back({{"id", l.id}, {"vertices", l.vertices}, {"closed", l.closed}, {"rms", l.rms},
                      {"shape", shape_json(l.shape)}, {"attributes", attributes_json(l.attributes)}});
@@ -245,27 +254,42 @@ std::string to_json_text(const FeatureSet& f) {
   doc["lines"] = std::move(lines);
   doc["groups"] = std::move(groups);
   doc["adjacency"] = std::move(adjacency);
-  // The patches, most of the text (their faces), each printed on its own, side by side.
-  std::vector<std::string> parts(patches.size());
-  tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t k) {
-    parts[k] = "\n  ";
-    parts[k].reserve(8 * f.patches[k].faces.size() + 4096);
-    print(patches[k], 2, parts[k], &f.patches[k].faces);
-  });
-  std::size_t size = 1 << 16;
-  for (const std::string& part : parts) size += part.size() + 1;
-  std::string text;
-  text.reserve(size);
-  print(doc, 0, text);
+  std::string head;
+  print(doc, 0, head);
   // "patches" sorts after every other key of the document: the object is reopened for it.
-  text.resize(text.size() - 2);  // "\n}"
-  text += ",\n \"patches\": [";
-  for (std::size_t k = 0; k < parts.size(); ++k) {
-    if (k > 0) text += ',';
-    text += parts[k];
-  }
-  text += parts.empty() ? "]" : "\n ]";
-  text += "\n}\n";
+  head.resize(head.size() - 2);  // "\n}"
+  head += ",\n \"patches\": [";
+  sink(head);
+  // A patch's faces stay where they are: print() takes them from the patch.
+  std::size_t next = 0;
+  const std::size_t count = f.patches.size();
+  tbb::parallel_pipeline(
+      8, tbb::make_filter<void, std::size_t>(tbb::filter_mode::serial_in_order,
+                                             [&](tbb::flow_control& fc) {
+                                               if (next == count) fc.stop();
+                                               return next++;
+                                             }) &
+             tbb::make_filter<std::size_t, std::string>(
+                 tbb::filter_mode::parallel,
+                 [&](std::size_t k) {
+                   const Patch& p = f.patches[k];
+                   const json j = {{"id", p.id},     {"faces", json::array()},      {"area", p.area},
+                                   {"rms", p.rms},   {"shape", shape_json(p.shape)}, {"attributes", attributes_json(p.attributes)}};
+                   std::string part = k > 0 ? ",\n  " : "\n  ";
+                   part.reserve(14 * p.faces.size() + 4096);  // (print_indices makes room for 13 a face)
+                   print(j, 2, part, &p.faces);
+                   return part;
+                 }) &
+             tbb::make_filter<std::string, void>(tbb::filter_mode::serial_in_order,
+                                                 [&](const std::string& part) { sink(part); }));
+  sink(count == 0 ? "]\n}\n" : "\n ]\n}\n");
+}
+
+}  // namespace
+
+std::string to_json_text(const FeatureSet& f) {
+  std::string text;
+  emit_json_text(f, [&](std::string_view piece) { text += piece; });
   return text;
 }
 
@@ -374,7 +398,9 @@ FeatureSet from_json_text(const std::string& text, const std::string& source) {
 }
 
 void write_features(const FeatureSet& features, const std::filesystem::path& path) {
-  write_file_atomic(path, to_json_text(features));
+  AtomicStream out(path);
+  emit_json_text(features, [&](std::string_view piece) { out.write(piece); });
+  out.commit();
 }
 
 FeatureSet read_features(const std::filesystem::path& path) {

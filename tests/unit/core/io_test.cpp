@@ -94,6 +94,41 @@ TEST(MeshIo, WriteIsAtomicAndLeavesNoTemporaryFile) {
     EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
 }
 
+TEST(Files, AtomicStreamShowsItsPiecesOnlyOnCommit) {
+  const auto dir = scratch_dir();
+  const fs::path target = dir / "out.json";
+  auto only_target_or_nothing = [&] {
+    for (const auto& e : fs::directory_iterator(dir))
+      if (e.path() != target) return false;
+    return true;
+  };
+  // Pieces of half a megabyte, past the writeback step (4 MB); the old file stays until the commit.
+  write_file_atomic(target, "old");
+  std::string expected;
+  {
+    AtomicStream out(target);
+    for (int k = 0; k < 9; ++k) {
+      const std::string piece(1 << 19, static_cast<char>('a' + k));
+      out.write(piece);
+      expected += piece;
+    }
+    out.write("");
+    EXPECT_EQ(read_file(target), "old");
+    out.commit();
+  }
+  EXPECT_EQ(read_file(target), expected);
+  EXPECT_TRUE(only_target_or_nothing());
+  // Not committed (an error on the way): the target stays as it was, no temporary is left.
+  {
+    AtomicStream out(target);
+    out.write("partial");
+  }
+  EXPECT_EQ(read_file(target), expected);
+  EXPECT_TRUE(only_target_or_nothing());
+  // Under a file, where no folder can be made.
+  EXPECT_THROW(AtomicStream(target / "x.json"), IoError);
+}
+
 TEST(MeshIo, ReadsPolygonsByFanTriangulation) {
   const auto dir = scratch_dir();
   write_text(dir / "quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");

@@ -1,7 +1,9 @@
 #pragma once
 /// \file File-system helpers every command uses: atomic output, input protection, hashing.
+#include <cstdint>
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 namespace s2c {
 
@@ -24,6 +26,30 @@ class AtomicFile {
  private:
   std::filesystem::path target_, temp_;
   bool committed_ = false;
+};
+
+/// Output written piece by piece to an AtomicFile. The disk starts writing each few megabytes as
+/// they come (sync_file_range), so the fsync of commit() waits for the last ones only: a 17 MB
+/// features.json spent 20 ms there after its last byte.
+class AtomicStream {
+ public:
+  /// \throw IoError if the temporary file cannot be created.
+  explicit AtomicStream(std::filesystem::path target);
+  ~AtomicStream();
+  AtomicStream(const AtomicStream&) = delete;
+  AtomicStream& operator=(const AtomicStream&) = delete;
+
+  /// Appends `piece`. \throw IoError
+  void write(std::string_view piece);
+  /// As AtomicFile::commit. \throw IoError
+  void commit();
+
+ private:
+  void close_file();
+
+  AtomicFile file_;
+  int fd_ = -1;
+  std::uint64_t written_ = 0, flushed_ = 0;  ///< bytes written; bytes handed to the disk
 };
 
 /// Writes `content` to `path` atomically. \throw IoError
