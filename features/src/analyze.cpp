@@ -6,11 +6,12 @@
 #include <chrono>
 #include <cmath>
 #include <map>
-#include <set>
+#include <optional>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
 #include "lines.h"
@@ -18,6 +19,7 @@
 #include "s2c/core/clock.h"
 #include "s2c/core/disjoint_sets.h"
 #include "s2c/core/errors.h"
+#include "s2c/features/constraints.h"
 #include "segment.h"
 #include "tensor_voting.h"
 
@@ -47,7 +49,8 @@ constexpr double kWavinessFactor = 3.0;
 /// its constraints would mean nothing anyway.
 constexpr std::size_t kMaxConstraintFeatures = 20000;
 
-void add_components(const MeshArrays& m, const Segmentation& seg, FeatureSet& f) {
+/// The mesh's connected components as groups of the features on them, numbered from G0.
+std::vector<Group> component_groups(const MeshArrays& m, const Segmentation& seg, const FeatureSet& f) {
   DisjointSets sets(m.faces());
   for (const auto& E : m.edges)
     if (E.f1 >= 0) sets.unite(E.f0, E.f1);
@@ -58,52 +61,63 @@ void add_components(const MeshArrays& m, const Segmentation& seg, FeatureSet& f)
     const int v = l.vertices.front();
     members[sets.find(m.vf[m.vf_start[v]])].push_back(l.id);
   }
+  std::vector<Group> groups;
   for (auto& [root, ids] : members) {
     Group g;
-    g.id = fmt::format("G{}", f.groups.size());
+    g.id = fmt::format("G{}", groups.size());
     g.kind = "component";
     g.members = std::move(ids);
-    f.groups.push_back(std::move(g));
+    groups.push_back(std::move(g));
   }
+  return groups;
 }
 
 /// Patches sharing a vertex are adjacent (the paper: one shared vertex counts), lines are adjacent
 /// to the patches around their vertices and to lines they share a vertex with.
 void add_adjacency(const MeshArrays& m, const Segmentation& seg, FeatureSet& f) {
-  std::set<std::pair<std::string, std::string>> pairs;
-  auto add = [&](const std::string& a, const std::string& b) {
-    if (a != b) pairs.emplace(std::min(a, b), std::max(a, b));
-  };
+  // Features by number: patch p is p, line l is np + l, which is the ids' natural order (P before
+  // L, numbers ascending). Pairs of numbers sort and compare for much less than pairs of ids.
+  const int np = static_cast<int>(f.patches.size()), nv = m.vertices();
   // (vertex, line) for every vertex of every line, by vertex: a few per cent of the vertices have
   // lines (a list per vertex was 23 MB of empty lists at a million vertices).
   std::vector<std::pair<int, int>> line_at;
   for (std::size_t l = 0; l < f.lines.size(); ++l)
-    for (int v : f.lines[l].vertices) line_at.emplace_back(v, static_cast<int>(l));
+    for (int v : f.lines[l].vertices) line_at.emplace_back(v, np + static_cast<int>(l));
   std::sort(line_at.begin(), line_at.end());
-  std::vector<int> around, lines_here;
-  auto next = line_at.begin();
-  for (int v = 0; v < m.vertices(); ++v) {
-    lines_here.clear();
-    for (; next != line_at.end() && next->first == v; ++next) lines_here.push_back(next->second);
-    around.clear();
-    for (int k = m.vf_start[v]; k < m.vf_start[v + 1]; ++k) around.push_back(seg.face_region[m.vf[k]]);
-    std::sort(around.begin(), around.end());
-    around.erase(std::unique(around.begin(), around.end()), around.end());
-    for (std::size_t i = 0; i < around.size(); ++i) {
-      for (std::size_t j = i + 1; j < around.size(); ++j) add(f.patches[around[i]].id, f.patches[around[j]].id);
-      for (int l : lines_here) add(f.patches[around[i]].id, f.lines[l].id);
+  // The vertices in blocks side by side, each collecting its pairs (smaller number first).
+  constexpr int kBlock = 1 << 16;
+  std::vector<std::vector<std::pair<int, int>>> found((nv + kBlock - 1) / kBlock);
+  tbb::parallel_for(0, static_cast<int>(found.size()), [&](int block) {
+    std::vector<std::pair<int, int>>& pairs = found[block];
+    auto add = [&](int a, int b) {
+      if (a != b) pairs.emplace_back(std::min(a, b), std::max(a, b));
+    };
+    std::vector<int> around, lines_here;
+    const int begin = block * kBlock, end = std::min(nv, begin + kBlock);
+    auto next = std::lower_bound(line_at.begin(), line_at.end(), std::make_pair(begin, -1));
+    for (int v = begin; v < end; ++v) {
+      lines_here.clear();
+      for (; next != line_at.end() && next->first == v; ++next) lines_here.push_back(next->second);
+      around.clear();
+      for (int k = m.vf_start[v]; k < m.vf_start[v + 1]; ++k) around.push_back(seg.face_region[m.vf[k]]);
+      std::sort(around.begin(), around.end());
+      around.erase(std::unique(around.begin(), around.end()), around.end());
+      for (std::size_t i = 0; i < around.size(); ++i) {
+        for (std::size_t j = i + 1; j < around.size(); ++j) add(around[i], around[j]);
+        for (int l : lines_here) add(around[i], l);
+      }
+      for (std::size_t i = 0; i < lines_here.size(); ++i)
+        for (std::size_t j = i + 1; j < lines_here.size(); ++j) add(lines_here[i], lines_here[j]);
     }
-    for (std::size_t i = 0; i < lines_here.size(); ++i)
-      for (std::size_t j = i + 1; j < lines_here.size(); ++j)
-        add(f.lines[lines_here[i]].id, f.lines[lines_here[j]].id);
-  }
-  // Natural order: P before L, numbers ascending.
-  auto key = [](const std::string& id) { return std::make_pair(id[0] == 'L', std::stoi(id.substr(1))); };
-  f.adjacency.assign(pairs.begin(), pairs.end());
-  for (auto& [a, b] : f.adjacency)
-    if (key(b) < key(a)) std::swap(a, b);
-  std::sort(f.adjacency.begin(), f.adjacency.end(),
-            [&](const auto& x, const auto& y) { return std::make_pair(key(x.first), key(x.second)) < std::make_pair(key(y.first), key(y.second)); });
+  });
+  std::vector<std::pair<int, int>> pairs;
+  for (const auto& block : found) pairs.insert(pairs.end(), block.begin(), block.end());
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  auto id = [&](int k) -> const std::string& { return k < np ? f.patches[k].id : f.lines[k - np].id; };
+  f.adjacency.clear();
+  f.adjacency.reserve(pairs.size());
+  for (const auto& [a, b] : pairs) f.adjacency.emplace_back(id(a), id(b));
 }
 
 }  // namespace
@@ -186,9 +200,6 @@ Analysis analyze_arrays(const MeshArrays& m, const FeatureOptions& o, nlohmann::
     f.lines.push_back(std::move(line));
   }
   t = Clock::now();
-  // Independent (one fills the adjacency, the other the component groups), 0.05 s each at a
-  // million vertices: side by side.
-  tbb::parallel_invoke([&] { add_adjacency(m, seg, f); }, [&] { add_components(m, seg, f); });
   int constraints = 0;
   const std::size_t feature_count = f.patches.size() + f.lines.size();
   const bool too_many = feature_count > kMaxConstraintFeatures;
@@ -196,17 +207,26 @@ Analysis analyze_arrays(const MeshArrays& m, const FeatureOptions& o, nlohmann::
     spdlog::warn("{} patches and lines: more than {}, so no constraints are detected; the mesh is "
                  "probably broken or very noisy: run scan2cad repair first, or raise --min-angle",
                  feature_count, kMaxConstraintFeatures);
-  if (o.constraints && !too_many) {
-    ConstraintOptions co = o.constraint;
-    co.diagonal = diag;
-    if (noisy && co.min_patch_area <= 0) {
-      double total = 0;
-      for (const auto& p : f.patches) total += p.area;
-      co.min_patch_area = kMinConstraintAreaShare * total;
-    }
-    if (noisy && co.min_fixed_angle_deg <= 0) co.min_fixed_angle_deg = o.min_crease_deg;
-    constraints = detect_constraints(f, co);
+  ConstraintOptions co = o.constraint;
+  co.diagonal = diag;
+  if (noisy && co.min_patch_area <= 0) {
+    double total = 0;
+    for (const auto& p : f.patches) total += p.area;
+    co.min_patch_area = kMinConstraintAreaShare * total;
   }
+  if (noisy && co.min_fixed_angle_deg <= 0) co.min_fixed_angle_deg = o.min_crease_deg;
+  // The component groups beside the adjacency and the constraint search that reads it (0.05 s
+  // each at a million vertices); the constraints are numbered after the components.
+  std::optional<ConstraintSearch> search;
+  std::vector<Group> components;
+  tbb::parallel_invoke(
+      [&] {
+        add_adjacency(m, seg, f);
+        if (o.constraints && !too_many) search.emplace(f, co);
+      },
+      [&] { components = component_groups(m, seg, f); });
+  f.groups = std::move(components);
+  if (search) constraints = search->add_to(f);
   timings["groups"] = seconds_since(t);
 
   if (report) {

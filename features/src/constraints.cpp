@@ -731,8 +731,22 @@ long group_number(const std::string& id) {
 
 }  // namespace
 
+struct ConstraintSearch::Result {
+  std::array<std::vector<Found>, kKinds> by_kind;
+};
+
+ConstraintSearch::ConstraintSearch(const FeatureSet& features, const ConstraintOptions& options)
+    : found_(std::make_unique<Result>(Result{Detector(features, options).run()})) {}
+ConstraintSearch::~ConstraintSearch() = default;
+ConstraintSearch::ConstraintSearch(ConstraintSearch&&) noexcept = default;
+ConstraintSearch& ConstraintSearch::operator=(ConstraintSearch&&) noexcept = default;
+
 int detect_constraints(FeatureSet& features, const ConstraintOptions& options) {
-  const std::array<std::vector<Found>, kKinds> found = Detector(features, options).run();
+  return ConstraintSearch(features, options).add_to(features);
+}
+
+int ConstraintSearch::add_to(FeatureSet& features) const {
+  const auto& found = found_->by_kind;
   long next = 0;
   for (const Group& g : features.groups) next = std::max(next, group_number(g.id) + 1);
   const int np = static_cast<int>(features.patches.size());

@@ -526,6 +526,36 @@ TEST(ConstraintsTest, PlateTruthImpliedAndAllHold) {
   EXPECT_EQ(count(p.f, ConstraintKind::perpendicular), 12);
 }
 
+TEST(ConstraintsTest, SearchThenAddIsDetectWithIdsAfterTheGroupsAddedMeanwhile) {
+  Part p = load_part("plate");
+  FeatureSet at_once = p.f;
+  detect_constraints(at_once, options_for(p));
+  // The search sees no groups; two groups are added before its constraints are numbered.
+  const ConstraintSearch search(p.f, options_for(p));
+  for (const char* id : {"G0", "G1"}) {
+    Group g;
+    g.id = id;
+    g.kind = "component";
+    p.f.groups.push_back(g);
+  }
+  const int added = search.add_to(p.f);
+  ASSERT_EQ(added, static_cast<int>(at_once.groups.size()));
+  ASSERT_EQ(p.f.groups.size(), at_once.groups.size() + 2);
+  for (std::size_t k = 0; k < at_once.groups.size(); ++k) {
+    const Group &a = at_once.groups[k], &b = p.f.groups[k + 2];
+    EXPECT_EQ(b.id, "G" + std::to_string(k + 2));
+    EXPECT_EQ(a.constraint, b.constraint);
+    EXPECT_EQ(a.value, b.value);
+    if (a.constraint != ConstraintKind::equal_angle) {
+      EXPECT_EQ(a.members, b.members) << a.id;
+    } else {  // members are fixed_angle groups: their ids moved by two as well
+      ASSERT_EQ(a.members.size(), b.members.size());
+      for (std::size_t i = 0; i < a.members.size(); ++i)
+        EXPECT_EQ(std::stoi(b.members[i].substr(1)), std::stoi(a.members[i].substr(1)) + 2);
+    }
+  }
+}
+
 TEST(ConstraintsTest, ShaftTruthImpliedAndAllHold) {
   Part p = load_part("shaft");
   p.adjacent("shaft_body", "tip");  // tangent: no line between them

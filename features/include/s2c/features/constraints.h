@@ -3,6 +3,7 @@
 /// constraint kinds with tight CAD tolerances; redundant constraints are removed (equivalence
 /// kinds become one group per class; line constraints are preferred where they imply the
 /// patch constraint, as the paper says).
+#include <memory>
 #include <vector>
 
 #include "s2c/features/feature_set.h"
@@ -32,5 +33,22 @@ struct ConstraintOptions {
 /// filled) and appends them to `features.groups` as kind "constraint" with ids continuing the
 /// existing G numbering. Returns how many were added.
 int detect_constraints(FeatureSet& features, const ConstraintOptions& options);
+
+/// detect_constraints in two steps: the search, which reads only the patches, lines and adjacency
+/// (so other groups may be added meanwhile, as the analysis adds the components), and then
+/// add_to(), which numbers what was found after the groups there are by then.
+class ConstraintSearch {
+ public:
+  ConstraintSearch(const FeatureSet& features, const ConstraintOptions& options);
+  ~ConstraintSearch();
+  ConstraintSearch(ConstraintSearch&&) noexcept;
+  ConstraintSearch& operator=(ConstraintSearch&&) noexcept;
+  /// Appends the constraints found to `features` (the one searched) and returns how many.
+  int add_to(FeatureSet& features) const;
+
+ private:
+  struct Result;
+  std::unique_ptr<Result> found_;
+};
 
 }  // namespace s2c::features
