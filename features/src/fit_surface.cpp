@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include <tbb/parallel_for.h>
@@ -76,13 +77,12 @@ bool normal_axis(const Normalized& s, bool centred, Vector3d& axis) {
 }
 
 /// The axis candidates: from the normals when known (the fit this is for says how), and the three
-/// principal axes of the points (long cylinders: the largest; short ones and symmetric sectors:
+/// principal axes `pc` of the points (long cylinders: the largest; short ones and symmetric sectors:
 /// one of the others), which also serve when there are no normals.
-std::vector<Vector3d> candidate_axes(const Normalized& s, bool centred_normals) {
+std::vector<Vector3d> candidate_axes(const Normalized& s, const fit::Pca& pc, bool centred_normals) {
   std::vector<Vector3d> axes;
   Vector3d a;
   if (normal_axis(s, centred_normals, a)) axes.push_back(a);
-  const fit::Pca pc = fit::pca(s.p, s.w);
   for (int k = 0; k < 3; ++k) axes.push_back(pc.vectors.col(k));
   return axes;
 }
@@ -200,13 +200,11 @@ bool refine_best(const Normalized& s, const std::vector<AxisStart>& starts, Axis
   return best_cost < kInf && refine_from<Model>(s, best);
 }
 
-}  // namespace
 
-Fit fit_plane(const Samples& s) {
+/// The plane fit of `s` (which has enough samples for one).
+Fit plane_fit(const Samples& s) {
   Fit out;
   out.shape.type = ShapeType::plane;
-  Normalized ns;
-  if (!fit::normalize(s, 3, ns)) return out;
   // Weighted PCA over all samples is already the exact least-squares plane (orthogonal
   // distance), so there is nothing left for a nonlinear refinement to do.
   const fit::Pca pc = fit::pca(s.points, s.weights);
@@ -224,8 +222,6 @@ Fit fit_plane(const Samples& s) {
   return out;
 }
 
-namespace {
-
 /// The sphere fit of `s`, refined from `m` (normalised coordinates).
 Fit sphere_fit(const Samples& s, const Normalized& ns, SphereModel m) {
   Fit out;
@@ -237,13 +233,10 @@ Fit sphere_fit(const Samples& s, const Normalized& ns, SphereModel m) {
   return out;
 }
 
-}  // namespace
-
-Fit fit_sphere(const Samples& s) {
+/// The sphere fit of `s` from the algebraic start on its normalised samples `ns`.
+Fit sphere_fit(const Samples& s, const Normalized& ns) {
   Fit out;
   out.shape.type = ShapeType::sphere;
-  Normalized ns;
-  if (!fit::normalize(s, 4, ns)) return out;
   // Algebraic: |x|² + D·x + E = 0 is linear in (D, E); coplanar points leave it undetermined.
   const int n = ns.size();
   Eigen::MatrixXd A(n, 4);
@@ -263,8 +256,6 @@ Fit fit_sphere(const Samples& s) {
   return sphere_fit(s, ns, SphereModel{&ns, c, std::sqrt(r2)});
 }
 
-namespace {
-
 /// The cylinder fit of `s` from a refined axis start (normalised coordinates).
 Fit cylinder_fit(const Samples& s, const Normalized& ns, const AxisStart& best) {
   Fit out;
@@ -278,15 +269,12 @@ Fit cylinder_fit(const Samples& s, const Normalized& ns, const AxisStart& best) 
   return out;
 }
 
-}  // namespace
-
-Fit fit_cylinder(const Samples& s) {
+/// The cylinder fit of `s` from the robust starts on `ns`, whose principal axes are `pc`.
+Fit cylinder_fit(const Samples& s, const Normalized& ns, const fit::Pca& pc) {
   Fit out;
   out.shape.type = ShapeType::cylinder;
-  Normalized ns;
-  if (!fit::normalize(s, 5, ns)) return out;
   std::vector<AxisStart> starts;
-  for (const Vector3d& a : candidate_axes(ns, false)) {
+  for (const Vector3d& a : candidate_axes(ns, pc, false)) {
     AxisStart st;
     if (circle_start(ns, a, st)) starts.push_back(st);
   }
@@ -294,8 +282,6 @@ Fit fit_cylinder(const Samples& s) {
   if (starts.empty() || !refine_best<CylinderModel>(ns, starts, best)) return out;
   return cylinder_fit(s, ns, best);
 }
-
-namespace {
 
 /// The cone fit of `s` from a refined axis start (normalised coordinates).
 Fit cone_fit(const Samples& s, const Normalized& ns, const AxisStart& best) {
@@ -337,17 +323,14 @@ bool axis_start_of(const Shape& shape, const Normalized& ns, AxisStart& out) {
   return all_finite(out) && out.r > 0;
 }
 
-}  // namespace
-
-Fit fit_cone(const Samples& s) {
+/// The cone fit of `s` from the robust starts on `ns`, whose principal axes are `pc`.
+Fit cone_fit(const Samples& s, const Normalized& ns, const fit::Pca& pc) {
   Fit out;
   out.shape.type = ShapeType::cone;
-  Normalized ns;
-  if (!fit::normalize(s, 6, ns)) return out;
   std::vector<AxisStart> starts;
   AxisStart st;
   if (tangent_plane_cone_start(ns, st)) starts.push_back(st);
-  for (const Vector3d& a : candidate_axes(ns, true)) {
+  for (const Vector3d& a : candidate_axes(ns, pc, true)) {
     if (algebraic_cone_start(ns, a, st)) starts.push_back(st);
     if (circle_start(ns, a, st)) starts.push_back(st);
   }
@@ -356,28 +339,59 @@ Fit fit_cone(const Samples& s) {
   return cone_fit(s, ns, best);
 }
 
-Fit refit_surface(const Samples& s, const Shape& start) {
+}  // namespace
+
+namespace fit {
+
+SurfaceFits::SurfaceFits(const Samples& s) : s_(s), n_(normalization(s)) {}
+
+const Pca& SurfaceFits::principal_axes() const {
+  std::call_once(pca_once_, [&] { pca_ = pca(n_.samples.p, n_.samples.w); });
+  return pca_;
+}
+
+Fit SurfaceFits::fit(ShapeType type) const {
+  Fit out;
+  out.shape.type = type;
+  const Normalized& ns = n_.samples;
+  switch (type) {
+    case ShapeType::plane: return n_.enough(3) ? plane_fit(s_) : out;
+    case ShapeType::sphere: return n_.enough(4) ? sphere_fit(s_, ns) : out;
+    case ShapeType::cylinder: return n_.enough(5) ? cylinder_fit(s_, ns, principal_axes()) : out;
+    case ShapeType::cone: return n_.enough(6) ? cone_fit(s_, ns, principal_axes()) : out;
+    default: return Fit{};
+  }
+}
+
+Fit SurfaceFits::refit(const Shape& start) const {
   Fit out;
   out.shape.type = start.type;
+  const Normalized& ns = n_.samples;
   switch (start.type) {
-    case ShapeType::plane: return fit_plane(s);
+    case ShapeType::plane: return fit(ShapeType::plane);
     case ShapeType::sphere: {
-      Normalized ns;
-      if (!fit::normalize(s, 4, ns)) return out;
+      if (!n_.enough(4)) return out;
       const SphereModel m{&ns, (start.point - ns.center) / ns.scale, start.radius / ns.scale};
-      return m.c.allFinite() && m.r > 0 ? sphere_fit(s, ns, m) : out;
+      return m.c.allFinite() && m.r > 0 ? sphere_fit(s_, ns, m) : out;
     }
     case ShapeType::cylinder:
     case ShapeType::cone: {
       const bool cone = start.type == ShapeType::cone;
-      Normalized ns;
       AxisStart st;
-      if (!fit::normalize(s, cone ? 6 : 5, ns) || !axis_start_of(start, ns, st)) return out;
+      if (!n_.enough(cone ? 6 : 5) || !axis_start_of(start, ns, st)) return out;
       if (cone ? !refine_from<ConeModel>(ns, st) : !refine_from<CylinderModel>(ns, st)) return out;
-      return cone ? cone_fit(s, ns, st) : cylinder_fit(s, ns, st);
+      return cone ? cone_fit(s_, ns, st) : cylinder_fit(s_, ns, st);
     }
     default: return out;
   }
 }
+
+}  // namespace fit
+
+Fit fit_plane(const Samples& s) { return fit::SurfaceFits(s).fit(ShapeType::plane); }
+Fit fit_sphere(const Samples& s) { return fit::SurfaceFits(s).fit(ShapeType::sphere); }
+Fit fit_cylinder(const Samples& s) { return fit::SurfaceFits(s).fit(ShapeType::cylinder); }
+Fit fit_cone(const Samples& s) { return fit::SurfaceFits(s).fit(ShapeType::cone); }
+Fit refit_surface(const Samples& s, const Shape& start) { return fit::SurfaceFits(s).refit(start); }
 
 }  // namespace s2c::features

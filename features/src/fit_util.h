@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -47,6 +48,18 @@ std::vector<std::size_t> stratified_pick(std::size_t n, std::size_t max);
 /// \throw InvalidInput if normals or weights are neither empty nor as many as the points.
 bool normalize(const Samples& s, int min_count, Normalized& out, int max_samples = kMaxRefineSamples);
 
+/// normalize() without its minimum count, for the fits of several types of one sample set (each
+/// normalised the same samples anew): enough(k) is what normalize(s, k, …) returns.
+struct Normalization {
+  Normalized samples;
+  int positive = 0;       ///< samples of positive weight
+  int pick_positive = 0;  ///< of them in the subsample
+  bool valid = false;     ///< finite, of positive total weight, not all at one point
+  bool enough(int min_count) const;
+};
+/// \throw InvalidInput as normalize.
+Normalization normalization(const Samples& s, int max_samples = kMaxRefineSamples);
+
 /// Weighted principal axes of points: eigenvalues ascending, eigenvectors in the columns.
 struct Pca {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
@@ -55,6 +68,27 @@ struct Pca {
 };
 /// `w` may be empty (all 1).
 Pca pca(const std::vector<Eigen::Vector3d>& p, const std::vector<double>& w);
+
+/// The surface fits of one sample set (fit_plane … fit_cone, refit_surface) on one normalisation,
+/// and the cylinder's and the cone's starts on one set of principal axes: choose_shape fits every
+/// type to the same samples, and each fit normalised them anew. The fits may run side by side.
+class SurfaceFits {
+ public:
+  /// \throw InvalidInput as the fits.
+  explicit SurfaceFits(const Samples& s);
+  /// As fit_plane, fit_sphere, fit_cylinder, fit_cone; Fit{} for other types.
+  Fit fit(ShapeType type) const;
+  /// As refit_surface.
+  Fit refit(const Shape& start) const;
+
+ private:
+  const Pca& principal_axes() const;
+
+  const Samples& s_;
+  Normalization n_;
+  mutable std::once_flag pca_once_;
+  mutable Pca pca_;
+};
 
 /// Orthonormal u, v (columns) perpendicular to the unit vector a.
 Eigen::Matrix<double, 3, 2> perpendicular_frame(const Eigen::Vector3d& a);

@@ -215,32 +215,30 @@ bool usable(const Fit& c, const SegmentParams& p) {
   return c.shape.type != ShapeType::cone || (c.shape.half_angle_deg >= 2.0 && c.shape.half_angle_deg <= 88.0);
 }
 
-Fit fit_of_type(ShapeType type, const Samples& s) {
-  switch (type) {
-    case ShapeType::plane: return fit_plane(s);
-    case ShapeType::sphere: return fit_sphere(s);
-    case ShapeType::cylinder: return fit_cylinder(s);
-    case ShapeType::cone: return fit_cone(s);
-    default: return Fit{};
-  }
+/// Can choose_shape(s, p) come out as `type`, given that type's own fit? Only if it is acceptable
+/// (plane) or usable (curved).
+bool eligible(ShapeType type, const Fit& fit, const SegmentParams& p) {
+  return type == ShapeType::plane ? acceptable(fit, p) : usable(fit, p);
 }
 
-/// Can choose_shape(s, p) come out as `type`? Only if that type's own fit is acceptable (plane) or
-/// usable (curved); one fit instead of four tells most failed merges apart. `fit` receives it.
+/// eligible() for the fit of `type` to `s`; one fit instead of four tells most failed merges apart.
+/// `fit` receives it.
 bool may_choose(ShapeType type, const Samples& s, const SegmentParams& p, Fit& fit) {
-  fit = fit_of_type(type, s);
-  return type == ShapeType::plane ? acceptable(fit, p) : usable(fit, p);
+  fit = fit::SurfaceFits(s).fit(type);
+  return eligible(type, fit, p);
 }
 
 /// may_choose for the type of `start`, refined from it first (a merge's union from the first
 /// region's shape: one refinement instead of the robust starts' several), from the robust
 /// starts when that refinement is not good enough.
 bool may_refit(const Shape& start, const Samples& s, const SegmentParams& p, Fit& fit) {
+  const fit::SurfaceFits fits(s);
   if (start.type != ShapeType::plane) {  // a plane's fit is direct: nothing to start from
-    fit = refit_surface(s, start);
+    fit = fits.refit(start);
     if (usable(fit, p)) return true;
   }
-  return may_choose(start.type, s, p, fit);
+  fit = fits.fit(start.type);
+  return eligible(start.type, fit, p);
 }
 
 /// Fits of one sample set by type: plane, sphere, cylinder, cone (ok false: none).
@@ -269,14 +267,15 @@ Fit choose_shape_with(const Samples& s, const SegmentParams& p, const Fit* known
     const double d = f.rms / p.tolerance, n = f.normal_rms_deg / p.normal_tol_deg;
     return d * d + n * n;
   };
+  const fit::SurfaceFits fits(s);
   auto fit = [&](ShapeType type) {
     if (known && known->shape.type == type) return *known;
     const Fit* before = warm && type != ShapeType::plane ? &(*warm)[type_slot(type)] : nullptr;
     if (before && before->shape.type == type && acceptable(*before, p)) {
-      Fit f = refit_surface(s, before->shape);
+      Fit f = fits.refit(before->shape);
       if (acceptable(f, p)) return f;
     }
-    return fit_of_type(type, s);
+    return fits.fit(type);
   };
   const Fit plane = fit(ShapeType::plane);
   Fit freeform;

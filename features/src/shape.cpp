@@ -131,7 +131,11 @@ std::vector<std::size_t> stratified_pick(std::size_t n, std::size_t max) {
   return pick;
 }
 
-bool normalize(const Samples& s, int min_count, Normalized& out, int max_samples) {
+bool Normalization::enough(int min_count) const {
+  return valid && positive >= min_count && pick_positive >= min_count;
+}
+
+Normalization normalization(const Samples& s, int max_samples) {
   const std::size_t n = s.points.size();
   if (!s.normals.empty() && s.normals.size() != n)
     throw InvalidInput("shape fit: " + std::to_string(s.normals.size()) + " normals for " + std::to_string(n) +
@@ -139,34 +143,33 @@ bool normalize(const Samples& s, int min_count, Normalized& out, int max_samples
   if (!s.weights.empty() && s.weights.size() != n)
     throw InvalidInput("shape fit: " + std::to_string(s.weights.size()) + " weights for " + std::to_string(n) +
                        " points");
+  Normalization result;
+  Normalized& out = result.samples;
   auto weight = [&](std::size_t i) { return s.weights.empty() ? 1.0 : s.weights[i]; };
-  int positive = 0;
   double wsum = 0;
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
   for (std::size_t i = 0; i < n; ++i) {
     const double w = weight(i);
-    if (!s.points[i].allFinite() || !std::isfinite(w) || w < 0) return false;
-    if (!s.normals.empty() && !s.normals[i].allFinite()) return false;
+    if (!s.points[i].allFinite() || !std::isfinite(w) || w < 0) return result;
+    if (!s.normals.empty() && !s.normals[i].allFinite()) return result;
     if (w > 0) {
-      ++positive;
+      ++result.positive;
       wsum += w;
       c += w * s.points[i];
     }
   }
-  if (positive < min_count || !(wsum > 0)) return false;
+  if (!(wsum > 0)) return result;
   c /= wsum;
   double var = 0;
   for (std::size_t i = 0; i < n; ++i) var += weight(i) * (s.points[i] - c).squaredNorm();
   const double scale = std::sqrt(var / wsum);
-  if (!(scale > 1e-12 * std::max(1.0, c.norm())) || !std::isfinite(scale)) return false;  // all points equal
+  if (!(scale > 1e-12 * std::max(1.0, c.norm())) || !std::isfinite(scale)) return result;  // all points equal
 
   const std::vector<std::size_t> pick = stratified_pick(n, static_cast<std::size_t>(max_samples));
-  out = Normalized{};
   out.center = c;
   out.scale = scale;
   out.p.reserve(pick.size()), out.n.reserve(pick.size()), out.w.reserve(pick.size()), out.sw.reserve(pick.size());
   double wpick = 0;
-  int pick_positive = 0;
   for (std::size_t i : pick) {
     out.p.push_back((s.points[i] - c) / scale);
     Eigen::Vector3d nn = Eigen::Vector3d::Zero();
@@ -180,14 +183,22 @@ bool normalize(const Samples& s, int min_count, Normalized& out, int max_samples
     out.n.push_back(nn);
     out.w.push_back(weight(i));
     wpick += weight(i);
-    pick_positive += weight(i) > 0;
+    result.pick_positive += weight(i) > 0;
   }
-  if (pick_positive < min_count || !(wpick > 0)) return false;
+  if (!(wpick > 0)) return result;
   const double mean = wpick / static_cast<double>(pick.size());
   for (double& w : out.w) {
     w /= mean;
     out.sw.push_back(std::sqrt(w));
   }
+  result.valid = true;
+  return result;
+}
+
+bool normalize(const Samples& s, int min_count, Normalized& out, int max_samples) {
+  Normalization n = normalization(s, max_samples);
+  if (!n.enough(min_count)) return false;
+  out = std::move(n.samples);
   return true;
 }
 
