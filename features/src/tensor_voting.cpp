@@ -300,8 +300,8 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
       const int v = order[i];
       if (flat[v]) {
         VertexTensor& out_v = out[v];
-        out_v.lambda = Eigen::Vector3d(1.0, 0.0, 0.0);
-        out_v.e3 = normals[m.vf[m.vf_start[v]]].unitOrthogonal();
+        out_v.lambda = Eigen::Vector3f(1.0f, 0.0f, 0.0f);
+        out_v.e3 = normals[m.vf[m.vf_start[v]]].unitOrthogonal().cast<float>();
         out_v.cls = VertexClass::face;
         continue;
       }
@@ -356,11 +356,12 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
       const Eigen::Vector3d ev = es.eigenvalues();  // ascending
       VertexTensor& out_v = out[v];
       if (!(ev[2] > 0)) continue;  // isolated vertex or only degenerate faces: a face vertex
-      out_v.lambda = Eigen::Vector3d(1.0, std::max(ev[1], 0.0) / ev[2], std::max(ev[0], 0.0) / ev[2]);
-      out_v.e3 = es.eigenvectors().col(0);
-      out_v.cls = out_v.lambda[2] > t.corner ? VertexClass::corner
-                  : out_v.lambda[1] > t.crease ? VertexClass::crease
-                                               : VertexClass::face;
+      const Eigen::Vector3d lambda(1.0, std::max(ev[1], 0.0) / ev[2], std::max(ev[0], 0.0) / ev[2]);
+      out_v.lambda = lambda.cast<float>();
+      out_v.e3 = es.eigenvectors().col(0).cast<float>();
+      out_v.cls = lambda[2] > t.corner   ? VertexClass::corner
+                  : lambda[1] > t.crease ? VertexClass::crease
+                                         : VertexClass::face;
     }
   });
   return out;

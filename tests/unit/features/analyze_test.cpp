@@ -155,7 +155,9 @@ TEST(FeaturesReal, CgalFandiskHasPlanesCylindersAndLines) {
 
 /// Tensor voting's search (a breadth-first walk over faces, pruned by bounding balls and squared
 /// distances) must find exactly the faces within the radius: compared with a sum over every face.
-void expect_vote_matches_all_faces(const TriangleSoup& soup, double radius, double tolerance = 1e-9) {
+/// The tensors are kept in float: 2e-7 is four times the rounding of a ratio ≤ 1, and a face left
+/// out moves the ratios by far more (its weight is at least e⁻³ of its area's share).
+void expect_vote_matches_all_faces(const TriangleSoup& soup, double radius, double tolerance = 2e-7) {
   Mesh mesh;
   soup_to_mesh(soup, mesh);
   const TriangleSoup s = mesh_to_soup(mesh);  // the mesh's own numbering
@@ -224,7 +226,7 @@ TEST(TensorVoting, PlainlyFlatVerticesGetTheVoteOfEveryFace) {
   EXPECT_EQ(plain, a.vertices() - 3 * (n + 1));
   // A plainly flat vertex gets λ2 = λ3 = 0; the closed-form eigenvalues of the summed, nearly
   // rank-one tensor come out a few 1e-9 of λ1 instead (far below any threshold: 0.015 here).
-  expect_vote_matches_all_faces(sheet, radius, 1e-7);
+  expect_vote_matches_all_faces(sheet, radius, 2e-7);
   const std::vector<VertexTensor> got = vote(a, a.fnormal, radius, t);
   for (int v = 0; v < a.vertices(); ++v) {
     if (flat[v]) {

@@ -26,11 +26,13 @@ struct FeatureOptions {
 };
 
 /// Per-vertex result of tensor voting.
+/// In float (computed in double): the class is decided before rounding, and a
+/// million vertices' tensors take 27 MB instead of 54 MB.
 struct VertexTensor {
-  Eigen::Vector3d lambda = Eigen::Vector3d::Zero();  ///< λ1 ≥ λ2 ≥ λ3 (normalised: λ1 = 1)
+  Eigen::Vector3f lambda = Eigen::Vector3f::Zero();  ///< λ1 ≥ λ2 ≥ λ3 (normalised: λ1 = 1)
   /// Crease tangent (the eigenvector of λ3). The normal, e1, is not kept: nothing reads it, and at
   /// a million vertices it was 23 MB.
-  Eigen::Vector3d e3 = Eigen::Vector3d::Zero();
+  Eigen::Vector3f e3 = Eigen::Vector3f::Zero();
   VertexClass cls = VertexClass::face;
 };
 
