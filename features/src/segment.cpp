@@ -99,9 +99,10 @@ double growth_cost(const MeshArrays& m, const std::vector<Eigen::Vector3d>& norm
                    int via, double tolerance) {
   const Eigen::Vector3d& n = normals[f];
   if (r.fit.shape.type == ShapeType::freeform) return 2.0 * (1.0 - n.dot(normals[via])) + 1.0;
+  const ShapeMetric metric(r.fit.shape);
   double d = 0;
-  for (int v : m.tri[f]) d = std::max(d, distance(r.fit.shape, m.pos[v]));
-  const Eigen::Vector3d sn = surface_normal(r.fit.shape, m.centroid(f));
+  for (int v : m.tri[f]) d = std::max(d, metric.distance(m.pos[v]));
+  const Eigen::Vector3d sn = metric.normal(m.centroid(f));
   const double agree = std::abs(sn.dot(n));
   return d / tolerance + 4.0 * (1.0 - agree);
 }
@@ -344,10 +345,10 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
   auto remaining = [&](int f) { return face_region[f] == region && (state[f] & kRemaining) != 0; };
   int epoch = 0;
   const double cos_tol = std::cos(p.normal_tol_deg * M_PI / 180.0);
-  auto fits = [&](const Shape& shape, int f) {
+  auto fits = [&](const ShapeMetric& shape, int f) {
     for (int v : m.tri[f])
-      if (distance(shape, m.pos[v]) > 1.5 * p.tolerance) return false;
-    return std::abs(surface_normal(shape, m.centroid(f)).dot(normals[f])) >= cos_tol;
+      if (shape.distance(m.pos[v]) > 1.5 * p.tolerance) return false;
+    return std::abs(shape.normal(m.centroid(f)).dot(normals[f])) >= cos_tol;
   };
   auto neighbours = [&](int f, auto&& visit) {
     for (int e : m.face_edges[f]) {
@@ -422,15 +423,17 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
       gathered = current.size();
       return finished(grown);
     };
+    ShapeMetric metric(fit.shape);
     for (std::size_t i = 0; i < current.size(); ++i) {
       neighbours(current[i], [&](int g) {
-        if (remaining(g) && stamp[g] != epoch && fits(fit.shape, g)) stamp[g] = epoch, current.push_back(g);
+        if (remaining(g) && stamp[g] != epoch && fits(metric, g)) stamp[g] = epoch, current.push_back(g);
       });
       if (current.size() > fitted_size * 3 / 2 + 8) {
         const TypeFits warm = warm_starts();
         const Fit refit = choose_shape_with(current_samples(), p, nullptr, &warm, &type_fits);
         if (refit.shape.type == ShapeType::freeform) break;
         fit = refit;
+        metric = ShapeMetric(fit.shape);
         fitted_size = current.size();
       }
     }

@@ -49,7 +49,15 @@ bool is_surface(ShapeType type) {
          type == ShapeType::cone;
 }
 
-double distance(const Shape& s, const Eigen::Vector3d& p) {
+ShapeMetric::ShapeMetric(const Shape& shape) : s_(&shape) {
+  if (shape.type != ShapeType::cone) return;
+  const double th = shape.half_angle_deg / kDegPerRad;
+  cos_ = std::cos(th);
+  sin_ = std::sin(th);
+}
+
+double ShapeMetric::distance(const Eigen::Vector3d& p) const {
+  const Shape& s = *s_;
   const Eigen::Vector3d v = p - s.point;
   switch (s.type) {
     case ShapeType::plane: return std::abs(s.dir.dot(v));
@@ -59,9 +67,8 @@ double distance(const Shape& s, const Eigen::Vector3d& p) {
       // In the half plane through the axis and p: h along the axis, rho away from it; the nappe is
       // the ray from the apex at half_angle from the axis. Points whose foot on that ray's line
       // falls behind the apex are nearest to the apex itself.
-      const double th = s.half_angle_deg / kDegPerRad;
       const double h = s.dir.dot(v), rho = radial(v, s.dir).norm();
-      if (h * std::cos(th) + rho * std::sin(th) >= 0) return std::abs(rho * std::cos(th) - h * std::sin(th));
+      if (h * cos_ + rho * sin_ >= 0) return std::abs(rho * cos_ - h * sin_);
       return v.norm();
     }
     case ShapeType::line: {
@@ -78,7 +85,8 @@ double distance(const Shape& s, const Eigen::Vector3d& p) {
   return 0.0;
 }
 
-Eigen::Vector3d surface_normal(const Shape& s, const Eigen::Vector3d& p) {
+Eigen::Vector3d ShapeMetric::normal(const Eigen::Vector3d& p) const {
+  const Shape& s = *s_;
   const Eigen::Vector3d v = p - s.point;
   switch (s.type) {
     case ShapeType::plane: return s.dir.normalized();
@@ -92,13 +100,16 @@ Eigen::Vector3d surface_normal(const Shape& s, const Eigen::Vector3d& p) {
       const double len = r.norm();
       if (!(len > 0)) return Eigen::Vector3d::Zero();  // on the axis: no direction away from it
       if (s.type == ShapeType::cylinder) return r / len;
-      const double th = s.half_angle_deg / kDegPerRad;
-      return std::cos(th) * (r / len) - std::sin(th) * s.dir;
+      return cos_ * (r / len) - sin_ * s.dir;
     }
     default: break;
   }
   return Eigen::Vector3d::Zero();
 }
+
+double distance(const Shape& s, const Eigen::Vector3d& p) { return ShapeMetric(s).distance(p); }
+
+Eigen::Vector3d surface_normal(const Shape& s, const Eigen::Vector3d& p) { return ShapeMetric(s).normal(p); }
 
 // ---- helpers of the fits (fit_util.h) ----
 namespace fit {
@@ -271,14 +282,15 @@ void finish(Fit& f, const Samples& s) {
   // one call (vectorised, vector_math.h); a sample without a normal counts for the distances only.
   std::vector<double> dist(n), angle(n);
   std::vector<char> has_angle(n, 0);
+  const ShapeMetric metric(f.shape);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 16384), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      dist[i] = distance(f.shape, s.points[i]);
+      dist[i] = metric.distance(s.points[i]);
       angle[i] = 1.0;
       if (s.normals.empty()) continue;
       const double len = s.normals[i].norm();
       if (!(len > 1e-12)) continue;
-      const Eigen::Vector3d sn = surface_normal(f.shape, s.points[i]);
+      const Eigen::Vector3d sn = metric.normal(s.points[i]);
       if (sn.squaredNorm() == 0) continue;
       angle[i] = std::min(1.0, std::abs(sn.dot(s.normals[i])) / len);
       has_angle[i] = 1;
