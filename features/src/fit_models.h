@@ -8,7 +8,7 @@
 
 #include <Eigen/Dense>
 
-#include "axis_passes.h"
+#include "fit_passes.h"
 #include "fit_util.h"
 
 namespace s2c::features::fit {
@@ -19,32 +19,6 @@ using Eigen::Vector3d;
 inline Vector3d tilt(const Vector3d& a, const Eigen::Matrix<double, 3, 2>& uv, double d0, double d1) {
   return (a + d0 * uv.col(0) + d1 * uv.col(1)).normalized();
 }
-
-struct SphereModel {
-  static constexpr int kParams = 4;
-  using Vec = Eigen::Matrix<double, kParams, 1>;
-  const Normalized* s;
-  Vector3d c;
-  double r;
-
-  int residual_count() const { return s->size(); }
-  void residuals(const Vec& d, Eigen::VectorXd& out) const {
-    const Vector3d c2 = c + d.head<3>();
-    const double r2 = r + d[3];
-    for (int i = 0; i < s->size(); ++i) out[i] = s->sw[i] * ((s->p[i] - c2).norm() - r2);
-  }
-  void jacobian(Jacobian<kParams>& J) const {
-    for (int i = 0; i < s->size(); ++i) {
-      const Vector3d v = s->p[i] - c;
-      const double len = v.norm();
-      J.row(i) << (len > 0 ? Vector3d(-s->sw[i] / len * v) : Vector3d::Zero()).transpose(), -s->sw[i];
-    }
-  }
-  void update(const Vec& d) {
-    c += d.head<3>();
-    r += d[3];
-  }
-};
 
 /// The samples by coordinate, for the axis models' passes (two samples per instruction). Made once
 /// per sample set and shared by the models refined on it: a cone's nine starts each copied them.
@@ -60,6 +34,57 @@ struct SampleColumns {
     }
   }
   Eigen::ArrayXd x, y, z, sw;
+};
+
+/// Sphere through centre c, radius r: residual sw (|sample − c| − r).
+class SphereModel {
+ public:
+  static constexpr int kParams = 4;
+  using Vec = Eigen::Matrix<double, kParams, 1>;
+  SphereModel(const Normalized* samples, const Vector3d& center, double radius) : s(samples), c(center), r(radius) {}
+
+  const Normalized* s;
+  Vector3d c;
+  double r;
+  /// The passes four samples at a time (fit_passes.h) where the CPU has AVX; the tests turn them
+  /// off to compare.
+  bool avx = have_avx_passes();
+
+  int residual_count() const { return s->size(); }
+  void residuals(const Vec& d, Eigen::VectorXd& out) const {
+    const Vector3d c2 = c + d.head<3>();
+    const double r2 = r + d[3];
+    if (avx) return sphere_residuals_avx(columns(), c2.data(), r2, out.data());
+    for (int i = 0; i < s->size(); ++i) out[i] = s->sw[i] * ((s->p[i] - c2).norm() - r2);
+  }
+  void jacobian(Jacobian<kParams>& J) const {
+    for (int i = 0; i < s->size(); ++i) {
+      const Vector3d v = s->p[i] - c;
+      const double len = v.norm();
+      J.row(i) << (len > 0 ? Vector3d(-s->sw[i] / len * v) : Vector3d::Zero()).transpose(), -s->sw[i];
+    }
+  }
+  /// JᵀJ and Jᵀres at the current parameters, each entry summed over the samples in order.
+  void normal_equations(const Eigen::VectorXd& res, Eigen::Matrix<double, kParams, kParams>& A, Vec& g) const {
+    if (avx) return sphere_normal_equations_avx(columns(), c.data(), res.data(), A.data(), g.data());
+    jacobian_.resize(s->size(), kParams);
+    jacobian(jacobian_);
+    fit::normal_equations<kParams>(jacobian_.data(), res.data(), s->size(), A, g);
+  }
+  void update(const Vec& d) {
+    c += d.head<3>();
+    r += d[3];
+  }
+
+
+ private:
+  ColumnView columns() const {
+    if (!columns_) columns_ = std::make_shared<const SampleColumns>(*s);
+    return {columns_->x.data(), columns_->y.data(), columns_->z.data(), columns_->sw.data(), s->size()};
+  }
+
+  mutable std::shared_ptr<const SampleColumns> columns_;  // of *s, made on first use
+  mutable Jacobian<kParams> jacobian_;                    // the path without AVX
 };
 
 /// Cylinder (theta fixed at 0) or cone around the axis through p along a: in the half plane of a
@@ -161,12 +186,12 @@ struct AxisModel {
     at_current_ = d == last_;  // moved() gives the same a and p as that residual pass did
   }
 
-  /// The passes four samples at a time (axis_passes.h) where the CPU has AVX; the tests turn them
+  /// The passes four samples at a time (fit_passes.h) where the CPU has AVX; the tests turn them
   /// off to compare with the two-lane passes below.
   bool avx = have_avx_passes();
 
  private:
-  AxisColumns columns() const {
+  ColumnView columns() const {
     const SampleColumns& c = *columns_;
     return {c.x.data(), c.y.data(), c.z.data(), c.sw.data(), static_cast<int>(c.x.size())};
   }

@@ -100,6 +100,8 @@ TEST(FitModels, SphereJacobianMatchesFiniteDifferences) {
 TEST(FitModels, LevenbergMarquardtUsesTheAnalyticJacobian) {
   static_assert(has_jacobian<ConeModel>::value && has_jacobian<CylinderModel>::value &&
                 has_jacobian<SphereModel>::value);
+  static_assert(has_normal_equations<ConeModel>::value && has_normal_equations<CylinderModel>::value &&
+                has_normal_equations<SphereModel>::value);
   // From a perturbed start the cone fit converges to the samples' cone (radius 0.8 at h = 0,
   // slope 0.3 → half angle atan 0.3, axis tilted by the 0.1 h shear).
   const Normalized s = noisy_samples(2000, 4);
@@ -154,12 +156,34 @@ void expect_avx_passes_give_the_same_bits(const Normalized& s) {
       << s.size() << " samples: refinement";
 }
 
+/// The same for the sphere (no geometry is kept between its passes).
+void expect_sphere_avx_passes_give_the_same_bits(const Normalized& s) {
+  SphereModel avx{&s, Vector3d(0.1, 0.0, -0.1), 0.9}, plain = avx;
+  avx.avx = true;
+  plain.avx = false;
+  const SphereModel::Vec step(0.01, -0.02, 0.03, 0.04);
+  Eigen::VectorXd ra(s.size()), rp(s.size());
+  Eigen::Matrix4d Aa, Ap;
+  SphereModel::Vec ga, gp;
+  for (const SphereModel::Vec& d : {SphereModel::Vec(SphereModel::Vec::Zero()), step}) {
+    avx.residuals(d, ra);
+    plain.residuals(d, rp);
+    EXPECT_TRUE(same_bits(ra, rp)) << s.size() << " samples: residuals";
+  }
+  avx.normal_equations(ra, Aa, ga);
+  plain.normal_equations(rp, Ap, gp);
+  EXPECT_TRUE(same_bits(Aa, Ap) && same_bits(ga, gp)) << s.size() << " samples: normal equations";
+  const double ca = levenberg_marquardt(avx), cp = levenberg_marquardt(plain);
+  EXPECT_TRUE(ca == cp && avx.c == plain.c && avx.r == plain.r) << s.size() << " samples: refinement";
+}
+
 TEST(FitModels, AvxPassesGiveTheTwoLanePassesBits) {
   if (!have_avx_passes()) GTEST_SKIP() << "this CPU has no AVX";
   for (const int n : {6, 7, 8, 9, 31, 32, 33, 37, 300}) {
     const Normalized s = noisy_samples(n, 10 + n);
     expect_avx_passes_give_the_same_bits<ConeModel>(s);
     expect_avx_passes_give_the_same_bits<CylinderModel>(s);
+    expect_sphere_avx_passes_give_the_same_bits(s);
   }
 }
 

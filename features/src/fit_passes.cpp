@@ -1,4 +1,4 @@
-#include "axis_passes.h"
+#include "fit_passes.h"
 
 #include <immintrin.h>
 
@@ -39,7 +39,7 @@ S2C_AVX inline __m256d dot(__m256d x, __m256d y, __m256d z, const double e[3]) {
 
 }  // namespace
 
-S2C_AVX void axis_residuals_avx(const AxisColumns& c, const double q[3], const double b[3], double r, double cos_theta,
+S2C_AVX void axis_residuals_avx(const ColumnView& c, const double q[3], const double b[3], double r, double cos_theta,
                                 double sin_theta, const AxisGeometry& g, double* out) {
   const __m256d qx = _mm256_set1_pd(q[0]), qy = _mm256_set1_pd(q[1]), qz = _mm256_set1_pd(q[2]);
   const __m256d bx = _mm256_set1_pd(b[0]), by = _mm256_set1_pd(b[1]), bz = _mm256_set1_pd(b[2]);
@@ -72,7 +72,7 @@ namespace {
 /// The Jacobian rows of samples [i, i + n), n ≤ 4, into rows[0..n) (eight doubles each, the last
 /// two unused).
 template <int K>
-S2C_AVX void jacobian_rows(const AxisColumns& c, const AxisGeometry& g, int i, int n, const double p[3],
+S2C_AVX void jacobian_rows(const ColumnView& c, const AxisGeometry& g, int i, int n, const double p[3],
                            const double u[3], const double t[3], double r, double cos_theta, double sin_theta,
                            double (*rows)[8]) {
   const __m256i mask = lanes(n);
@@ -110,7 +110,7 @@ S2C_AVX void jacobian_rows(const AxisColumns& c, const AxisGeometry& g, int i, i
 }
 
 template <int K>
-S2C_AVX void normal_equations(const AxisColumns& c, const AxisGeometry& g, const double p[3], const double u[3],
+S2C_AVX void normal_equations(const ColumnView& c, const AxisGeometry& g, const double p[3], const double u[3],
                               const double t[3], double r, double cos_theta, double sin_theta, const double* res,
                               double* A, double* jr) {
   static_assert(K == 5 || K == 6, "the cylinder and the cone");
@@ -165,13 +165,74 @@ S2C_AVX void normal_equations(const AxisColumns& c, const AxisGeometry& g, const
 
 }  // namespace
 
-S2C_AVX void axis_normal_equations_avx(int K, const AxisColumns& c, const AxisGeometry& g, const double p[3],
+S2C_AVX void axis_normal_equations_avx(int K, const ColumnView& c, const AxisGeometry& g, const double p[3],
                                        const double u[3], const double t[3], double r, double cos_theta,
                                        double sin_theta, const double* res, double* A, double* jr) {
   if (K == 6)
     normal_equations<6>(c, g, p, u, t, r, cos_theta, sin_theta, res, A, jr);
   else
     normal_equations<5>(c, g, p, u, t, r, cos_theta, sin_theta, res, A, jr);
+}
+
+S2C_AVX void sphere_residuals_avx(const ColumnView& c, const double center[3], double r, double* out) {
+  const __m256d cx = _mm256_set1_pd(center[0]), cy = _mm256_set1_pd(center[1]), cz = _mm256_set1_pd(center[2]);
+  const __m256d rr = _mm256_set1_pd(r);
+  for (int i = 0; i < c.m; i += 4) {
+    const int n = c.m - i < 4 ? c.m - i : 4;
+    const __m256i mask = lanes(n);
+    const __m256d vx = _mm256_sub_pd(load(c.x + i, n, mask), cx);
+    const __m256d vy = _mm256_sub_pd(load(c.y + i, n, mask), cy);
+    const __m256d vz = _mm256_sub_pd(load(c.z + i, n, mask), cz);
+    const __m256d len = _mm256_sqrt_pd(
+        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(vx, vx), _mm256_mul_pd(vy, vy)), _mm256_mul_pd(vz, vz)));
+    store(out + i, _mm256_mul_pd(load(c.sw + i, n, mask), _mm256_sub_pd(len, rr)), n, mask);
+  }
+}
+
+S2C_AVX void sphere_normal_equations_avx(const ColumnView& c, const double center[3], const double* res, double* A,
+                                         double* jr) {
+  const __m256d cx = _mm256_set1_pd(center[0]), cy = _mm256_set1_pd(center[1]), cz = _mm256_set1_pd(center[2]);
+  const __m256d zero = _mm256_setzero_pd();
+  // Per sample the row (−sw/len) (v, 0) + (0, 0, 0, −sw) with v = sample − c (zero but the last
+  // where len is not positive); A's column b gets the row times its entry b: all sixteen entries,
+  // each a sum in sample order.
+  __m256d a0 = zero, a1 = zero, a2 = zero, a3 = zero, g = zero;
+  alignas(32) double rows[4][4];
+  for (int i = 0; i < c.m; i += 4) {
+    const int n = c.m - i < 4 ? c.m - i : 4;
+    const __m256i mask = lanes(n);
+    const __m256d vx = _mm256_sub_pd(load(c.x + i, n, mask), cx);
+    const __m256d vy = _mm256_sub_pd(load(c.y + i, n, mask), cy);
+    const __m256d vz = _mm256_sub_pd(load(c.z + i, n, mask), cz);
+    const __m256d len = _mm256_sqrt_pd(
+        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(vx, vx), _mm256_mul_pd(vy, vy)), _mm256_mul_pd(vz, vz)));
+    const __m256d minus_sw = negated(load(c.sw + i, n, mask));
+    const __m256d positive = _mm256_cmp_pd(len, zero, _CMP_GT_OQ);
+    const __m256d t = _mm256_div_pd(minus_sw, len);  // (−sw) / len
+    const __m256d j0 = _mm256_and_pd(_mm256_mul_pd(t, vx), positive);
+    const __m256d j1 = _mm256_and_pd(_mm256_mul_pd(t, vy), positive);
+    const __m256d j2 = _mm256_and_pd(_mm256_mul_pd(t, vz), positive);
+    const __m256d t0 = _mm256_unpacklo_pd(j0, j1), t1 = _mm256_unpackhi_pd(j0, j1);
+    const __m256d t2 = _mm256_unpacklo_pd(j2, minus_sw), t3 = _mm256_unpackhi_pd(j2, minus_sw);
+    _mm256_store_pd(rows[0], _mm256_permute2f128_pd(t0, t2, 0x20));
+    _mm256_store_pd(rows[1], _mm256_permute2f128_pd(t1, t3, 0x20));
+    _mm256_store_pd(rows[2], _mm256_permute2f128_pd(t0, t2, 0x31));
+    _mm256_store_pd(rows[3], _mm256_permute2f128_pd(t1, t3, 0x31));
+    for (int s = 0; s < n; ++s) {
+      const double* row = rows[s];
+      const __m256d head = _mm256_load_pd(row);
+      a0 = _mm256_add_pd(a0, _mm256_mul_pd(head, _mm256_broadcast_sd(row)));
+      a1 = _mm256_add_pd(a1, _mm256_mul_pd(head, _mm256_broadcast_sd(row + 1)));
+      a2 = _mm256_add_pd(a2, _mm256_mul_pd(head, _mm256_broadcast_sd(row + 2)));
+      a3 = _mm256_add_pd(a3, _mm256_mul_pd(head, _mm256_broadcast_sd(row + 3)));
+      g = _mm256_add_pd(g, _mm256_mul_pd(head, _mm256_broadcast_sd(res + i + s)));
+    }
+  }
+  _mm256_storeu_pd(A, a0);
+  _mm256_storeu_pd(A + 4, a1);
+  _mm256_storeu_pd(A + 8, a2);
+  _mm256_storeu_pd(A + 12, a3);
+  _mm256_storeu_pd(jr, g);
 }
 
 }  // namespace s2c::features::fit
