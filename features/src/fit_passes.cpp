@@ -37,25 +37,47 @@ S2C_AVX inline __m256d dot(__m256d x, __m256d y, __m256d z, const double e[3]) {
                        _mm256_mul_pd(z, _mm256_set1_pd(e[2])));
 }
 
+/// sample − q for the samples [i, i + n) of `c`, by coordinate.
+struct Offset {
+  __m256d x, y, z;
+};
+S2C_AVX inline Offset offset(const ColumnView& c, int i, int n, __m256i mask, const double q[3]) {
+  return {_mm256_sub_pd(load(c.x + i, n, mask), _mm256_set1_pd(q[0])),
+          _mm256_sub_pd(load(c.y + i, n, mask), _mm256_set1_pd(q[1])),
+          _mm256_sub_pd(load(c.z + i, n, mask), _mm256_set1_pd(q[2]))};
+}
+
+/// sqrt((x² + y²) + z²), the order of Eigen's 3-vector norm.
+S2C_AVX inline __m256d length(__m256d x, __m256d y, __m256d z) {
+  return _mm256_sqrt_pd(_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(y, y)), _mm256_mul_pd(z, z)));
+}
+
+/// Four columns of four samples' values as the samples' rows: row s gets (c0[s], c1[s], c2[s],
+/// c3[s]) at rows + s·stride (32-byte aligned).
+S2C_AVX inline void store_rows(__m256d c0, __m256d c1, __m256d c2, __m256d c3, double* rows, int stride) {
+  const __m256d t0 = _mm256_unpacklo_pd(c0, c1), t1 = _mm256_unpackhi_pd(c0, c1);
+  const __m256d t2 = _mm256_unpacklo_pd(c2, c3), t3 = _mm256_unpackhi_pd(c2, c3);
+  _mm256_store_pd(rows, _mm256_permute2f128_pd(t0, t2, 0x20));
+  _mm256_store_pd(rows + stride, _mm256_permute2f128_pd(t1, t3, 0x20));
+  _mm256_store_pd(rows + 2 * stride, _mm256_permute2f128_pd(t0, t2, 0x31));
+  _mm256_store_pd(rows + 3 * stride, _mm256_permute2f128_pd(t1, t3, 0x31));
+}
+
 }  // namespace
 
 S2C_AVX void axis_residuals_avx(const ColumnView& c, const double q[3], const double b[3], double r, double cos_theta,
                                 double sin_theta, const AxisGeometry& g, double* out) {
-  const __m256d qx = _mm256_set1_pd(q[0]), qy = _mm256_set1_pd(q[1]), qz = _mm256_set1_pd(q[2]);
   const __m256d bx = _mm256_set1_pd(b[0]), by = _mm256_set1_pd(b[1]), bz = _mm256_set1_pd(b[2]);
   const __m256d rr = _mm256_set1_pd(r), ct = _mm256_set1_pd(cos_theta), st = _mm256_set1_pd(sin_theta);
   for (int i = 0; i < c.m; i += 4) {
     const int n = c.m - i < 4 ? c.m - i : 4;
     const __m256i mask = lanes(n);
-    const __m256d vx = _mm256_sub_pd(load(c.x + i, n, mask), qx);
-    const __m256d vy = _mm256_sub_pd(load(c.y + i, n, mask), qy);
-    const __m256d vz = _mm256_sub_pd(load(c.z + i, n, mask), qz);
-    const __m256d h = dot(vx, vy, vz, b);
-    const __m256d wx = _mm256_sub_pd(vx, _mm256_mul_pd(h, bx));
-    const __m256d wy = _mm256_sub_pd(vy, _mm256_mul_pd(h, by));
-    const __m256d wz = _mm256_sub_pd(vz, _mm256_mul_pd(h, bz));
-    const __m256d rho = _mm256_sqrt_pd(
-        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(wx, wx), _mm256_mul_pd(wy, wy)), _mm256_mul_pd(wz, wz)));
+    const Offset v = offset(c, i, n, mask, q);
+    const __m256d h = dot(v.x, v.y, v.z, b);
+    const __m256d wx = _mm256_sub_pd(v.x, _mm256_mul_pd(h, bx));
+    const __m256d wy = _mm256_sub_pd(v.y, _mm256_mul_pd(h, by));
+    const __m256d wz = _mm256_sub_pd(v.z, _mm256_mul_pd(h, bz));
+    const __m256d rho = length(wx, wy, wz);
     const __m256d res = _mm256_mul_pd(load(c.sw + i, n, mask),
                                       _mm256_sub_pd(_mm256_mul_pd(_mm256_sub_pd(rho, rr), ct), _mm256_mul_pd(h, st)));
     store(g.h + i, h, n, mask);
@@ -77,16 +99,14 @@ S2C_AVX void jacobian_rows(const ColumnView& c, const AxisGeometry& g, int i, in
                            double (*rows)[8]) {
   const __m256i mask = lanes(n);
   const __m256d ct = _mm256_set1_pd(cos_theta), st = _mm256_set1_pd(sin_theta), zero = _mm256_setzero_pd();
-  const __m256d vx = _mm256_sub_pd(load(c.x + i, n, mask), _mm256_set1_pd(p[0]));
-  const __m256d vy = _mm256_sub_pd(load(c.y + i, n, mask), _mm256_set1_pd(p[1]));
-  const __m256d vz = _mm256_sub_pd(load(c.z + i, n, mask), _mm256_set1_pd(p[2]));
+  const Offset v = offset(c, i, n, mask, p);
   const __m256d rho = load(g.rho + i, n, mask), h = load(g.h + i, n, mask), sw = load(c.sw + i, n, mask);
   const __m256d wx = load(g.wx + i, n, mask), wy = load(g.wy + i, n, mask), wz = load(g.wz + i, n, mask);
   // (w·u, w·t)/rho, zero where rho is not positive (on the axis; any direction is a subgradient).
   const __m256d off_axis = _mm256_cmp_pd(rho, zero, _CMP_GT_OQ);
   const __m256d wu = _mm256_and_pd(_mm256_div_pd(dot(wx, wy, wz, u), rho), off_axis);
   const __m256d wt = _mm256_and_pd(_mm256_div_pd(dot(wx, wy, wz, t), rho), off_axis);
-  const __m256d du = dot(vx, vy, vz, u), dt = dot(vx, vy, vz, t);
+  const __m256d du = dot(v.x, v.y, v.z, u), dt = dot(v.x, v.y, v.z, t);
   const __m256d ct_h = _mm256_mul_pd(_mm256_set1_pd(-cos_theta), h);  // (−cos θ) h
   const __m256d j0 = _mm256_mul_pd(sw, _mm256_sub_pd(_mm256_mul_pd(ct_h, wu), _mm256_mul_pd(st, du)));
   const __m256d j1 = _mm256_mul_pd(sw, _mm256_sub_pd(_mm256_mul_pd(ct_h, wt), _mm256_mul_pd(st, dt)));
@@ -96,12 +116,7 @@ S2C_AVX void jacobian_rows(const ColumnView& c, const AxisGeometry& g, int i, in
                                                              _mm256_mul_pd(h, ct)))
                            : zero;
   // The rows: a 4 × 4 transpose of (J0..J3), and (J4, J5) by pairs.
-  const __m256d t0 = _mm256_unpacklo_pd(j0, j1), t1 = _mm256_unpackhi_pd(j0, j1);
-  const __m256d t2 = _mm256_unpacklo_pd(j2, j3), t3 = _mm256_unpackhi_pd(j2, j3);
-  _mm256_store_pd(rows[0], _mm256_permute2f128_pd(t0, t2, 0x20));
-  _mm256_store_pd(rows[1], _mm256_permute2f128_pd(t1, t3, 0x20));
-  _mm256_store_pd(rows[2], _mm256_permute2f128_pd(t0, t2, 0x31));
-  _mm256_store_pd(rows[3], _mm256_permute2f128_pd(t1, t3, 0x31));
+  store_rows(j0, j1, j2, j3, rows[0], 8);
   const __m256d e0 = _mm256_unpacklo_pd(j4, j5), e1 = _mm256_unpackhi_pd(j4, j5);
   _mm_store_pd(rows[0] + 4, _mm256_castpd256_pd128(e0));
   _mm_store_pd(rows[1] + 4, _mm256_castpd256_pd128(e1));
@@ -175,23 +190,18 @@ S2C_AVX void axis_normal_equations_avx(int K, const ColumnView& c, const AxisGeo
 }
 
 S2C_AVX void sphere_residuals_avx(const ColumnView& c, const double center[3], double r, double* out) {
-  const __m256d cx = _mm256_set1_pd(center[0]), cy = _mm256_set1_pd(center[1]), cz = _mm256_set1_pd(center[2]);
   const __m256d rr = _mm256_set1_pd(r);
   for (int i = 0; i < c.m; i += 4) {
     const int n = c.m - i < 4 ? c.m - i : 4;
     const __m256i mask = lanes(n);
-    const __m256d vx = _mm256_sub_pd(load(c.x + i, n, mask), cx);
-    const __m256d vy = _mm256_sub_pd(load(c.y + i, n, mask), cy);
-    const __m256d vz = _mm256_sub_pd(load(c.z + i, n, mask), cz);
-    const __m256d len = _mm256_sqrt_pd(
-        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(vx, vx), _mm256_mul_pd(vy, vy)), _mm256_mul_pd(vz, vz)));
+    const Offset v = offset(c, i, n, mask, center);
+    const __m256d len = length(v.x, v.y, v.z);
     store(out + i, _mm256_mul_pd(load(c.sw + i, n, mask), _mm256_sub_pd(len, rr)), n, mask);
   }
 }
 
 S2C_AVX void sphere_normal_equations_avx(const ColumnView& c, const double center[3], const double* res, double* A,
                                          double* jr) {
-  const __m256d cx = _mm256_set1_pd(center[0]), cy = _mm256_set1_pd(center[1]), cz = _mm256_set1_pd(center[2]);
   const __m256d zero = _mm256_setzero_pd();
   // Per sample the row (−sw/len) (v, 0) + (0, 0, 0, −sw) with v = sample − c (zero but the last
   // where len is not positive); A's column b gets the row times its entry b: all sixteen entries,
@@ -201,23 +211,15 @@ S2C_AVX void sphere_normal_equations_avx(const ColumnView& c, const double cente
   for (int i = 0; i < c.m; i += 4) {
     const int n = c.m - i < 4 ? c.m - i : 4;
     const __m256i mask = lanes(n);
-    const __m256d vx = _mm256_sub_pd(load(c.x + i, n, mask), cx);
-    const __m256d vy = _mm256_sub_pd(load(c.y + i, n, mask), cy);
-    const __m256d vz = _mm256_sub_pd(load(c.z + i, n, mask), cz);
-    const __m256d len = _mm256_sqrt_pd(
-        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(vx, vx), _mm256_mul_pd(vy, vy)), _mm256_mul_pd(vz, vz)));
+    const Offset v = offset(c, i, n, mask, center);
+    const __m256d len = length(v.x, v.y, v.z);
     const __m256d minus_sw = negated(load(c.sw + i, n, mask));
     const __m256d positive = _mm256_cmp_pd(len, zero, _CMP_GT_OQ);
     const __m256d t = _mm256_div_pd(minus_sw, len);  // (−sw) / len
-    const __m256d j0 = _mm256_and_pd(_mm256_mul_pd(t, vx), positive);
-    const __m256d j1 = _mm256_and_pd(_mm256_mul_pd(t, vy), positive);
-    const __m256d j2 = _mm256_and_pd(_mm256_mul_pd(t, vz), positive);
-    const __m256d t0 = _mm256_unpacklo_pd(j0, j1), t1 = _mm256_unpackhi_pd(j0, j1);
-    const __m256d t2 = _mm256_unpacklo_pd(j2, minus_sw), t3 = _mm256_unpackhi_pd(j2, minus_sw);
-    _mm256_store_pd(rows[0], _mm256_permute2f128_pd(t0, t2, 0x20));
-    _mm256_store_pd(rows[1], _mm256_permute2f128_pd(t1, t3, 0x20));
-    _mm256_store_pd(rows[2], _mm256_permute2f128_pd(t0, t2, 0x31));
-    _mm256_store_pd(rows[3], _mm256_permute2f128_pd(t1, t3, 0x31));
+    const __m256d j0 = _mm256_and_pd(_mm256_mul_pd(t, v.x), positive);
+    const __m256d j1 = _mm256_and_pd(_mm256_mul_pd(t, v.y), positive);
+    const __m256d j2 = _mm256_and_pd(_mm256_mul_pd(t, v.z), positive);
+    store_rows(j0, j1, j2, minus_sw, rows[0], 4);
     for (int s = 0; s < n; ++s) {
       const double* row = rows[s];
       const __m256d head = _mm256_load_pd(row);
