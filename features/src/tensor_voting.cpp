@@ -273,8 +273,21 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
   // farther than the radius whatever the rounding, so the faces voting are exactly those within it.
   const double far = radius * (1.0 + 1e-9), far2 = far * far * (1.0 + 1e-9);
   struct alignas(128) Scratch {  // (a cache line pair of its own: threads write their vectors' ends)
-    std::vector<int> mark;      // face f queued for the current vertex: mark[f] == vertex
-    std::vector<int> expanded;  // vertex u's faces queued: expanded[u] == vertex
+    // Which faces and vertices the current vertex's walk has queued: stamp[x] == the walk's
+    // number. 16-bit numbers, the arrays cleared when they wrap (every 65,535 walks): half the
+    // memory of vertex numbers, and half the cache lines to miss.
+    std::vector<std::uint16_t> mark;      // face f queued
+    std::vector<std::uint16_t> expanded;  // vertex u's faces queued
+    std::uint16_t walk = 0;
+    /// The number of a new walk.
+    std::uint16_t next_walk() {
+      if (++walk == 0) {
+        std::fill(mark.begin(), mark.end(), 0);
+        std::fill(expanded.begin(), expanded.end(), 0);
+        walk = 1;
+      }
+      return walk;
+    }
     std::vector<int> queue;
     std::vector<int> voters;      // faces within the radius, in queue order
     std::vector<double> weights;  // their exp(−3d/r), computed together (vector_math.h)
@@ -293,7 +306,7 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
   std::vector<VertexTensor> out(nv);
   // One scratch per thread of the arena, allocated here for the same reason as the balls.
   std::vector<Scratch> scratch(static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
-  for (Scratch& s : scratch) s.mark.assign(nf, -1), s.expanded.assign(nv, -1);
+  for (Scratch& s : scratch) s.mark.assign(nf, 0), s.expanded.assign(nv, 0);
   tbb::parallel_for(tbb::blocked_range<int>(0, nv, 256), [&](const tbb::blocked_range<int>& range) {
     Scratch& s = scratch[static_cast<std::size_t>(tbb::this_task_arena::current_thread_index())];
     for (int i = range.begin(); i < range.end(); ++i) {
@@ -308,9 +321,10 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
       const Eigen::Vector3d p = m.pos[v];
       Eigen::Matrix3d T = Eigen::Matrix3d::Zero();
       s.queue.clear();
-      s.expanded[v] = v;
+      const std::uint16_t walk = s.next_walk();
+      s.expanded[v] = walk;
       for (int k = m.vf_start[v]; k < m.vf_start[v + 1]; ++k) {
-        s.mark[m.vf[k]] = v;
+        s.mark[m.vf[k]] = walk;
         s.queue.push_back(m.vf[k]);
       }
       const std::size_t incident_faces = s.queue.size();  // v's own faces come first
@@ -333,11 +347,11 @@ std::vector<VertexTensor> vote(const MeshArrays& m, const std::vector<Eigen::Vec
         // A vertex's faces are queued once: after that every one of them is marked, so a second
         // pass over its list (up to three per vertex otherwise) would queue nothing.
         for (int u : m.tri[f]) {
-          if (s.expanded[u] == v) continue;
-          s.expanded[u] = v;
+          if (s.expanded[u] == walk) continue;
+          s.expanded[u] = walk;
           for (int k = m.vf_start[u]; k < m.vf_start[u + 1]; ++k)
-            if (s.mark[m.vf[k]] != v) {
-              s.mark[m.vf[k]] = v;
+            if (s.mark[m.vf[k]] != walk) {
+              s.mark[m.vf[k]] = walk;
               s.queue.push_back(m.vf[k]);
             }
         }
