@@ -41,7 +41,10 @@ class SphereModel {
  public:
   static constexpr int kParams = 4;
   using Vec = Eigen::Matrix<double, kParams, 1>;
-  SphereModel(const Normalized* samples, const Vector3d& center, double radius) : s(samples), c(center), r(radius) {}
+  /// `columns`, when given, must be those of *samples.
+  SphereModel(const Normalized* samples, const Vector3d& center, double radius,
+              std::shared_ptr<const SampleColumns> columns = nullptr)
+      : s(samples), c(center), r(radius), columns_(std::move(columns)) {}
 
   const Normalized* s;
   Vector3d c;

@@ -166,10 +166,12 @@ bool all_finite(const AxisStart& st) {
   return st.a.allFinite() && st.p.allFinite() && std::isfinite(st.r) && std::isfinite(st.theta);
 }
 
-/// One Levenberg–Marquardt run of the model from `start` on the samples `s`.
+/// One Levenberg–Marquardt run of the model from `start` on the samples `s` (whose columns, when
+/// given, are `columns`).
 template <class Model>
-bool refine_from(const Normalized& s, AxisStart& start) {
-  Model m(s, start.a, start.p, start.r, start.theta);
+bool refine_from(const Normalized& s, AxisStart& start, std::shared_ptr<const fit::SampleColumns> columns = nullptr) {
+  if (!columns) columns = std::make_shared<const fit::SampleColumns>(s);
+  Model m(s, std::move(columns), start.a, start.p, start.r, start.theta);
   if (!std::isfinite(fit::levenberg_marquardt(m))) return false;
   start = {m.a, m.p, m.r, m.theta};
   return all_finite(start);
@@ -178,13 +180,18 @@ bool refine_from(const Normalized& s, AxisStart& start) {
 /// Refines every start on a coarse subsample for kCoarseIterations steps, then the best one on all
 /// refinement samples to convergence.
 template <class Model>
-bool refine_best(const Normalized& s, const std::vector<AxisStart>& starts, AxisStart& best) {
-  const Normalized coarse = thin(s, kCoarseSamples);
+bool refine_best(const Normalized& s, const std::shared_ptr<const fit::SampleColumns>& columns_of_s,
+                 const std::vector<AxisStart>& starts, AxisStart& best) {
+  // (A copy only when thinned: most sample sets are smaller, and their columns then serve the
+  // last run too.)
+  const bool thinned = s.size() > kCoarseSamples;
+  const Normalized thinned_samples = thinned ? thin(s, kCoarseSamples) : Normalized{};
+  const Normalized& coarse = thinned ? thinned_samples : s;
   // The starts' runs are independent: side by side (a cone's nine are the longest path of a
   // small region's shape choice), then the best taken in start order as one loop would.
   std::vector<double> costs(starts.size());
   std::vector<AxisStart> refined(starts.size());
-  const auto columns = std::make_shared<const fit::SampleColumns>(coarse);
+  const auto columns = thinned ? std::make_shared<const fit::SampleColumns>(coarse) : columns_of_s;
   tbb::parallel_for(std::size_t{0}, starts.size(), [&](std::size_t i) {
     const AxisStart& st = starts[i];
     Model m(coarse, columns, st.a, st.p, st.r, st.theta);
@@ -197,7 +204,7 @@ bool refine_best(const Normalized& s, const std::vector<AxisStart>& starts, Axis
     best_cost = costs[i];
     best = refined[i];
   }
-  return best_cost < kInf && refine_from<Model>(s, best);
+  return best_cost < kInf && refine_from<Model>(s, best, columns_of_s);
 }
 
 
@@ -234,7 +241,7 @@ Fit sphere_fit(const Samples& s, const Normalized& ns, SphereModel m) {
 }
 
 /// The sphere fit of `s` from the algebraic start on its normalised samples `ns`.
-Fit sphere_fit(const Samples& s, const Normalized& ns) {
+Fit sphere_fit(const Samples& s, const Normalized& ns, const std::shared_ptr<const fit::SampleColumns>& columns) {
   Fit out;
   out.shape.type = ShapeType::sphere;
   // Algebraic: |x|² + D·x + E = 0 is linear in (D, E); coplanar points leave it undetermined.
@@ -253,7 +260,7 @@ Fit sphere_fit(const Samples& s, const Normalized& ns) {
   const Vector3d c = -0.5 * x.head<3>();
   const double r2 = c.squaredNorm() - x[3];
   if (!x.allFinite() || !(r2 > 0)) return out;
-  return sphere_fit(s, ns, SphereModel{&ns, c, std::sqrt(r2)});
+  return sphere_fit(s, ns, SphereModel{&ns, c, std::sqrt(r2), columns});
 }
 
 /// The cylinder fit of `s` from a refined axis start (normalised coordinates).
@@ -270,7 +277,8 @@ Fit cylinder_fit(const Samples& s, const Normalized& ns, const AxisStart& best) 
 }
 
 /// The cylinder fit of `s` from the robust starts on `ns`, whose principal axes are `pc`.
-Fit cylinder_fit(const Samples& s, const Normalized& ns, const fit::Pca& pc) {
+Fit cylinder_fit(const Samples& s, const Normalized& ns, const std::shared_ptr<const fit::SampleColumns>& columns,
+                 const fit::Pca& pc) {
   Fit out;
   out.shape.type = ShapeType::cylinder;
   std::vector<AxisStart> starts;
@@ -279,7 +287,7 @@ Fit cylinder_fit(const Samples& s, const Normalized& ns, const fit::Pca& pc) {
     if (circle_start(ns, a, st)) starts.push_back(st);
   }
   AxisStart best;
-  if (starts.empty() || !refine_best<CylinderModel>(ns, starts, best)) return out;
+  if (starts.empty() || !refine_best<CylinderModel>(ns, columns, starts, best)) return out;
   return cylinder_fit(s, ns, best);
 }
 
@@ -324,7 +332,8 @@ bool axis_start_of(const Shape& shape, const Normalized& ns, AxisStart& out) {
 }
 
 /// The cone fit of `s` from the robust starts on `ns`, whose principal axes are `pc`.
-Fit cone_fit(const Samples& s, const Normalized& ns, const fit::Pca& pc) {
+Fit cone_fit(const Samples& s, const Normalized& ns, const std::shared_ptr<const fit::SampleColumns>& columns,
+             const fit::Pca& pc) {
   Fit out;
   out.shape.type = ShapeType::cone;
   std::vector<AxisStart> starts;
@@ -335,7 +344,7 @@ Fit cone_fit(const Samples& s, const Normalized& ns, const fit::Pca& pc) {
     if (circle_start(ns, a, st)) starts.push_back(st);
   }
   AxisStart best;
-  if (starts.empty() || !refine_best<ConeModel>(ns, starts, best)) return out;
+  if (starts.empty() || !refine_best<ConeModel>(ns, columns, starts, best)) return out;
   return cone_fit(s, ns, best);
 }
 
@@ -350,15 +359,20 @@ const Pca& SurfaceFits::principal_axes() const {
   return pca_;
 }
 
+const std::shared_ptr<const SampleColumns>& SurfaceFits::columns() const {
+  std::call_once(columns_once_, [&] { columns_ = std::make_shared<const SampleColumns>(n_.samples); });
+  return columns_;
+}
+
 Fit SurfaceFits::fit(ShapeType type) const {
   Fit out;
   out.shape.type = type;
   const Normalized& ns = n_.samples;
   switch (type) {
     case ShapeType::plane: return n_.enough(3) ? plane_fit(s_) : out;
-    case ShapeType::sphere: return n_.enough(4) ? sphere_fit(s_, ns) : out;
-    case ShapeType::cylinder: return n_.enough(5) ? cylinder_fit(s_, ns, principal_axes()) : out;
-    case ShapeType::cone: return n_.enough(6) ? cone_fit(s_, ns, principal_axes()) : out;
+    case ShapeType::sphere: return n_.enough(4) ? sphere_fit(s_, ns, columns()) : out;
+    case ShapeType::cylinder: return n_.enough(5) ? cylinder_fit(s_, ns, columns(), principal_axes()) : out;
+    case ShapeType::cone: return n_.enough(6) ? cone_fit(s_, ns, columns(), principal_axes()) : out;
     default: return Fit{};
   }
 }
@@ -371,7 +385,7 @@ Fit SurfaceFits::refit(const Shape& start) const {
     case ShapeType::plane: return fit(ShapeType::plane);
     case ShapeType::sphere: {
       if (!n_.enough(4)) return out;
-      const SphereModel m{&ns, (start.point - ns.center) / ns.scale, start.radius / ns.scale};
+      const SphereModel m{&ns, (start.point - ns.center) / ns.scale, start.radius / ns.scale, columns()};
       return m.c.allFinite() && m.r > 0 ? sphere_fit(s_, ns, m) : out;
     }
     case ShapeType::cylinder:
@@ -379,7 +393,7 @@ Fit SurfaceFits::refit(const Shape& start) const {
       const bool cone = start.type == ShapeType::cone;
       AxisStart st;
       if (!n_.enough(cone ? 6 : 5) || !axis_start_of(start, ns, st)) return out;
-      if (cone ? !refine_from<ConeModel>(ns, st) : !refine_from<CylinderModel>(ns, st)) return out;
+      if (cone ? !refine_from<ConeModel>(ns, st, columns()) : !refine_from<CylinderModel>(ns, st, columns())) return out;
       return cone ? cone_fit(s_, ns, st) : cylinder_fit(s_, ns, st);
     }
     default: return out;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <type_traits>
 #include <utility>
@@ -69,9 +70,12 @@ struct Pca {
 /// `w` may be empty (all 1).
 Pca pca(const std::vector<Eigen::Vector3d>& p, const std::vector<double>& w);
 
-/// The surface fits of one sample set (fit_plane … fit_cone, refit_surface) on one normalisation,
-/// and the cylinder's and the cone's starts on one set of principal axes: choose_shape fits every
-/// type to the same samples, and each fit normalised them anew. The fits may run side by side.
+struct SampleColumns;
+
+/// The surface fits of one sample set (fit_plane … fit_cone, refit_surface) on one normalisation
+/// and its columns, and the cylinder's and the cone's starts on one set of principal axes:
+/// choose_shape fits every type to the same samples, and each fit normalised (and copied) them
+/// anew. The fits may run side by side.
 class SurfaceFits {
  public:
   /// \throw InvalidInput as the fits.
@@ -83,11 +87,13 @@ class SurfaceFits {
 
  private:
   const Pca& principal_axes() const;
+  const std::shared_ptr<const SampleColumns>& columns() const;
 
   const Samples& s_;
   Normalization n_;
-  mutable std::once_flag pca_once_;
+  mutable std::once_flag pca_once_, columns_once_;
   mutable Pca pca_;
+  mutable std::shared_ptr<const SampleColumns> columns_;
 };
 
 /// Orthonormal u, v (columns) perpendicular to the unit vector a.
