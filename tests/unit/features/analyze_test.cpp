@@ -1,6 +1,7 @@
 // The feature analysis against the fixture parts' ground truth (fixtures/parts/*.truth.json) and
 // on real CAD meshes: primitives, feature lines and constraints, clean and noisy.
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <random>
@@ -157,7 +158,8 @@ TEST(FeaturesReal, CgalFandiskHasPlanesCylindersAndLines) {
 /// distances) must find exactly the faces within the radius: compared with a sum over every face.
 /// The tensors are kept in float: 2e-7 is four times the rounding of a ratio ≤ 1, and a face left
 /// out moves the ratios by far more (its weight is at least e⁻³ of its area's share).
-void expect_vote_matches_all_faces(const TriangleSoup& soup, double radius, double tolerance = 2e-7) {
+void expect_vote_matches_all_faces(const TriangleSoup& soup, double radius, double tolerance = 2e-7,
+                                   std::size_t stride = 1) {
   Mesh mesh;
   soup_to_mesh(soup, mesh);
   const TriangleSoup s = mesh_to_soup(mesh);  // the mesh's own numbering
@@ -165,7 +167,7 @@ void expect_vote_matches_all_faces(const TriangleSoup& soup, double radius, doub
   ASSERT_EQ(got.size(), s.vertices.size());
   const double disc = M_PI * radius * radius;
   int checked = 0;
-  for (std::size_t v = 0; v < s.vertices.size(); ++v) {
+  for (std::size_t v = 0; v < s.vertices.size(); v += stride) {
     const Eigen::Vector3d& p = s.vertices[v];
     Eigen::Matrix3d T = Eigen::Matrix3d::Zero();
     for (const auto& t : s.faces) {
@@ -207,6 +209,31 @@ TEST(TensorVoting, FindsExactlyTheFacesWithinTheRadius) {
 /// Vertices amid a plane skip the walk (plainly_flat): on a sheet folded by 40° all do but those
 /// within the radius of the other plane, and every vertex's λ and class still match the sum over
 /// every face, the ones the fold passes within the radius of included.
+TEST(TensorVoting, WalkNumbersWrapWithoutLosingFaces) {
+  // A thread numbers its walks in 16 bits and clears its marks when the numbers wrap: 163,842
+  // curved (so voted) vertices on one thread wrap twice. Every 4,001st vertex against the sum
+  // over every face.
+  TriangleSoup ball = test::icosphere(Eigen::Vector3d::Zero(), 50.0, 7);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> jitter(-0.02, 0.02);
+  for (auto& q : ball.vertices) q += Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng));
+  ASSERT_GT(ball.vertices.size(), 2u * 65536u);
+  tbb::task_arena(1).execute([&] { expect_vote_matches_all_faces(ball, 0.5, 2e-7, 4001); });
+  // Every vertex the same on one thread and on three, whose walks wrap at other vertices. (A mark
+  // left over from the walk 65,536 before matters only where that walk passed nearby, which it
+  // rarely does: these checks cannot prove the clearing needed, only that wrapping harms nothing.)
+  Mesh mesh;
+  soup_to_mesh(ball, mesh);
+  std::vector<VertexTensor> one, three;
+  tbb::task_arena(1).execute([&] { one = vote_tensors(mesh, 0.5, 20.0, 0.0); });
+  tbb::task_arena(3).execute([&] { three = vote_tensors(mesh, 0.5, 20.0, 0.0); });
+  ASSERT_EQ(one.size(), three.size());
+  int differ = 0;
+  for (std::size_t v = 0; v < one.size(); ++v)
+    differ += one[v].lambda != three[v].lambda || one[v].e3 != three[v].e3 || one[v].cls != three[v].cls;
+  EXPECT_EQ(differ, 0);
+}
+
 TEST(TensorVoting, PlainlyFlatVerticesGetTheVoteOfEveryFace) {
   constexpr int n = 30;
   const double fold = 40.0 * M_PI / 180.0;
