@@ -2,6 +2,9 @@
 
 #include <immintrin.h>
 
+// Compiled for AVX (without FMA) function by function; called only when have_avx_passes().
+#define S2C_AVX __attribute__((target("avx")))
+
 namespace s2c::features::fit {
 
 bool have_avx_passes() {
@@ -10,8 +13,6 @@ bool have_avx_passes() {
 }
 
 namespace {
-
-#define S2C_AVX __attribute__((target("avx")))
 
 /// Lanes [0, n) of a 4-sample group, for the masked loads and stores of the last group.
 S2C_AVX inline __m256i lanes(int n) {
