@@ -33,8 +33,21 @@ struct SampleColumns {
       sw[i] = samples.sw[i];
     }
   }
+  /// The columns as fit_passes.h takes them.
+  ColumnView view() const { return {x.data(), y.data(), z.data(), sw.data(), static_cast<int>(x.size())}; }
   Eigen::ArrayXd x, y, z, sw;
 };
+
+/// A model's normal_equations() without AVX: its Jacobian stored in `J`, then summed by
+/// fit::normal_equations.
+template <class Model>
+void normal_equations_of_jacobian(const Model& model, Jacobian<Model::kParams>& J, const Eigen::VectorXd& res,
+                                  Eigen::Matrix<double, Model::kParams, Model::kParams>& A,
+                                  Eigen::Matrix<double, Model::kParams, 1>& g) {
+  J.resize(model.residual_count(), Model::kParams);
+  model.jacobian(J);
+  normal_equations<Model::kParams>(J.data(), res.data(), model.residual_count(), A, g);
+}
 
 /// Sphere through centre c, radius r: residual sw (|sample − c| − r).
 class SphereModel {
@@ -70,9 +83,7 @@ class SphereModel {
   /// JᵀJ and Jᵀres at the current parameters, each entry summed over the samples in order.
   void normal_equations(const Eigen::VectorXd& res, Eigen::Matrix<double, kParams, kParams>& A, Vec& g) const {
     if (avx) return sphere_normal_equations_avx(columns(), c.data(), res.data(), A.data(), g.data());
-    jacobian_.resize(s->size(), kParams);
-    jacobian(jacobian_);
-    fit::normal_equations<kParams>(jacobian_.data(), res.data(), s->size(), A, g);
+    normal_equations_of_jacobian(*this, jacobian_, res, A, g);
   }
   void update(const Vec& d) {
     c += d.head<3>();
@@ -83,7 +94,7 @@ class SphereModel {
  private:
   ColumnView columns() const {
     if (!columns_) columns_ = std::make_shared<const SampleColumns>(*s);
-    return {columns_->x.data(), columns_->y.data(), columns_->z.data(), columns_->sw.data(), s->size()};
+    return columns_->view();
   }
 
   mutable std::shared_ptr<const SampleColumns> columns_;  // of *s, made on first use
@@ -139,12 +150,7 @@ struct AxisModel {
   /// JᵀJ and Jᵀres of the Jacobian at the current parameters (see jacobian()), each entry summed
   /// over the samples in order: with AVX straight from the geometry, without storing J.
   void normal_equations(const Eigen::VectorXd& res, Eigen::Matrix<double, K, K>& A, Vec& g) const {
-    if (!avx) {
-      jacobian_.resize(s->size(), K);
-      jacobian(jacobian_);
-      fit::normal_equations<K>(jacobian_.data(), res.data(), s->size(), A, g);
-      return;
-    }
+    if (!avx) return normal_equations_of_jacobian(*this, jacobian_, res, A, g);
     if (!at_current_) {
       resize_geometry();
       axis_residuals_avx(columns(), p.data(), a.data(), r, 0.0, 0.0, geometry_arrays(), nullptr);
@@ -194,10 +200,7 @@ struct AxisModel {
   bool avx = have_avx_passes();
 
  private:
-  ColumnView columns() const {
-    const SampleColumns& c = *columns_;
-    return {c.x.data(), c.y.data(), c.z.data(), c.sw.data(), static_cast<int>(c.x.size())};
-  }
+  ColumnView columns() const { return columns_->view(); }
   AxisGeometry geometry_arrays() const { return {h_.data(), wx_.data(), wy_.data(), wz_.data(), rho_.data()}; }
   void resize_geometry() const {
     const Eigen::Index m = columns_->x.size();

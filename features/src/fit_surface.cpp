@@ -166,12 +166,11 @@ bool all_finite(const AxisStart& st) {
   return st.a.allFinite() && st.p.allFinite() && std::isfinite(st.r) && std::isfinite(st.theta);
 }
 
-/// One Levenberg–Marquardt run of the model from `start` on the samples `s` (whose columns, when
-/// given, are `columns`).
+/// One Levenberg–Marquardt run of the model from `start` on the samples `s`, whose columns are
+/// `columns`.
 template <class Model>
-bool refine_from(const Normalized& s, AxisStart& start, std::shared_ptr<const fit::SampleColumns> columns = nullptr) {
-  if (!columns) columns = std::make_shared<const fit::SampleColumns>(s);
-  Model m(s, std::move(columns), start.a, start.p, start.r, start.theta);
+bool refine_from(const Normalized& s, const std::shared_ptr<const fit::SampleColumns>& columns, AxisStart& start) {
+  Model m(s, columns, start.a, start.p, start.r, start.theta);
   if (!std::isfinite(fit::levenberg_marquardt(m))) return false;
   start = {m.a, m.p, m.r, m.theta};
   return all_finite(start);
@@ -204,9 +203,8 @@ bool refine_best(const Normalized& s, const std::shared_ptr<const fit::SampleCol
     best_cost = costs[i];
     best = refined[i];
   }
-  return best_cost < kInf && refine_from<Model>(s, best, columns_of_s);
+  return best_cost < kInf && refine_from<Model>(s, columns_of_s, best);
 }
-
 
 /// The plane fit of `s` (which has enough samples for one).
 Fit plane_fit(const Samples& s) {
@@ -393,7 +391,7 @@ Fit SurfaceFits::refit(const Shape& start) const {
       const bool cone = start.type == ShapeType::cone;
       AxisStart st;
       if (!n_.enough(cone ? 6 : 5) || !axis_start_of(start, ns, st)) return out;
-      if (cone ? !refine_from<ConeModel>(ns, st, columns()) : !refine_from<CylinderModel>(ns, st, columns())) return out;
+      if (cone ? !refine_from<ConeModel>(ns, columns(), st) : !refine_from<CylinderModel>(ns, columns(), st)) return out;
       return cone ? cone_fit(s_, ns, st) : cylinder_fit(s_, ns, st);
     }
     default: return out;

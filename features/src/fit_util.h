@@ -140,9 +140,10 @@ struct has_jacobian<Model, std::void_t<decltype(std::declval<const Model&>().jac
 /// JᵀJ into A and Jᵀr into g for the m rows of J (row-major, K columns), each entry summed over
 /// the rows in order. Only the lower triangle is summed, in packets of two neighbouring entries of
 /// one matrix row: (J_ia J_ib, J_ia J_ib+1) is J_ia times two neighbouring entries of the row, one
-/// unaligned load. The twelve packets of K = 6, and g's three, stay in registers (the whole outer
-/// product took eighteen, and spilled to the stack on every row). The upper triangle is copied
-/// from the lower: J_ia J_ib and J_ib J_ia are the same product, so A is what the full sums give.
+/// unaligned load: twelve packets for K = 6, and g's three (the whole outer product took
+/// eighteen, most of them spilled to the stack on every row; GCC still spills a few of these).
+/// The upper triangle is copied from the lower: J_ia J_ib and J_ib J_ia are the same product, so
+/// A is what the full sums give.
 template <int K>
 void normal_equations(const double* J, const double* r, int m, Eigen::Matrix<double, K, K>& A,
                       Eigen::Matrix<double, K, 1>& g) {
