@@ -43,7 +43,8 @@ int main(int argc, char** argv) {
                  "Smallest crease angle to detect, degrees (angle between the face normals across the edge); on "
                  "noisy meshes also the smallest angle stated as a fixed_angle constraint")
       ->check(CLI::Range(1.0, 120.0))->capture_default_str();
-  app.add_option("--radius", o.radius, "Tensor voting radius, mm (default: 1 median edge length, 3 on noisy meshes)")
+  app.add_option("--radius", o.radius, "Tensor voting radius, mm (default: 1 median edge length; on noisy meshes 2, or 3 when the noise is at "
+                 "least 4% of the edge)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--noise", o.noise, "Noise sigma of the surface, mm (default: measured from the mesh)")
       ->check(CLI::NonNegativeNumber);

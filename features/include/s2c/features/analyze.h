@@ -18,7 +18,7 @@ enum class VertexClass : unsigned char { face, crease, corner };
 
 struct FeatureOptions {
   double min_crease_deg = 25.0;   ///< smallest crease angle (between face normals) to detect
-  double radius = 0.0;            ///< voting radius, mm (0: 1 median edge length, 3 on noisy meshes)
+  double radius = 0.0;            ///< voting radius, mm (0: 1 median edge length; noisy: 2, 3 from noise ≥ 4 % of it)
   double noise = -1.0;            ///< noise σ of the surface, mm (< 0: measured from the mesh)
   double fit_tolerance = 0.0;     ///< accept a shape when RMS ≤ this, mm (0: from noise and size)
   bool constraints = true;
