@@ -44,8 +44,10 @@ constexpr double kCleanNoise = 0.003;
 constexpr double kWideVoteNoise = 0.04;
 constexpr double kNarrowVoteEdges = 2.0, kWideVoteEdges = 3.0;
 
-/// The default voting radius in median edge lengths.
-double noisy_vote_edges(bool noisy, double relative_noise) {
+/// The default voting radius in median edge lengths. (On a noisy mesh the tensors only order the
+/// split's seeds and count the classes in the report: the patches, lines and constraints come from
+/// the filtered normals and the fits, so the vote need only be as wide as the noise demands.)
+double vote_edges(bool noisy, double relative_noise) {
   if (!noisy) return 1.0;
   return relative_noise < kWideVoteNoise ? kNarrowVoteEdges : kWideVoteEdges;
 }
@@ -156,7 +158,7 @@ Analysis analyze_arrays(const MeshArrays& m, const FeatureOptions& o, nlohmann::
   // so one edge is enough: a vertex's own faces always vote, and faces one edge away show a crease
   // that passes next to it. Two edges found the same patches, lines and constraints on the
   // fixture parts at twice the time (bench/README, "speed"), and widened the crease band.
-  out.radius = o.radius > 0 ? o.radius : noisy_vote_edges(noisy, out.noise / edge) * edge;
+  out.radius = o.radius > 0 ? o.radius : vote_edges(noisy, out.noise / edge) * edge;
   // (A reference, not a copy, of the face normals: 80 MB at 3.3 M faces.)
   std::vector<Eigen::Vector3d> filtered;
   if (noisy) filtered = filter_normals(m, 8, 0.35);
