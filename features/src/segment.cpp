@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <optional>
 #include <queue>
@@ -11,6 +12,7 @@
 #include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/task_group.h>
 
 #include "fit_util.h"
 #include "s2c/core/disjoint_sets.h"
@@ -371,6 +373,17 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
   keyed.insert(keyed.end(), rim.begin(), rim.end());
   std::vector<Region> out;
   std::vector<int> leftovers;
+  // A carved-out region's last fit reads only its own samples, and the search goes on without
+  // it: it runs as a task beside the next seeds (a scan's single flood-fill region is split on
+  // one thread, whose fits otherwise left the other core idle a third of the time). The deque
+  // keeps each job where it is while more are added.
+  struct FinalFit {
+    RawSamples samples;
+    TypeFits warm;
+    Fit fit;
+  };
+  std::deque<FinalFit> final_fits;
+  tbb::task_group fitting;
   // Faces near a seed no shape fitted are not tried as seeds again (on a freeform surface every
   // face would cost two fits otherwise), but other regions may still grow over them.
   for (const auto& keyed_seed : keyed) {
@@ -442,12 +455,15 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
       leftovers.insert(leftovers.end(), current.begin(), current.end());
       continue;
     }
+    accumulate(m, normals, current, grown, gathered);
+    FinalFit& job = final_fits.emplace_back(FinalFit{std::move(grown), warm_starts(), Fit{}});
+    fitting.run([&job, &p] { job.fit = choose_shape_with(finished(std::move(job.samples)), p, nullptr, &job.warm); });
     Region r;
-    const TypeFits warm = warm_starts();
-    r.fit = choose_shape_with(current_samples(), p, nullptr, &warm);
     r.faces = std::move(current);
     out.push_back(std::move(r));
   }
+  fitting.wait();
+  for (std::size_t k = 0; k < final_fits.size(); ++k) out[k].fit = final_fits[k].fit;
   for (int f : faces)
     if (remaining(f)) leftovers.push_back(f);
   if (!leftovers.empty()) {
