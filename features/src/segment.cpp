@@ -431,9 +431,12 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
     };
     RawSamples grown;  // samples of current[0 .. gathered), extended at each fit
     std::size_t gathered = 0;
-    auto current_samples = [&] {
+    auto gather = [&] {  // the faces of `current` not yet in `grown`
       accumulate(m, normals, current, grown, gathered);
       gathered = current.size();
+    };
+    auto current_samples = [&] {
+      gather();
       return finished(grown);
     };
     ShapeMetric metric(fit.shape);
@@ -455,7 +458,7 @@ std::vector<Region> split_region(const MeshArrays& m, const std::vector<Eigen::V
       leftovers.insert(leftovers.end(), current.begin(), current.end());
       continue;
     }
-    accumulate(m, normals, current, grown, gathered);
+    gather();
     FinalFit& job = final_fits.emplace_back(FinalFit{std::move(grown), warm_starts(), Fit{}});
     fitting.run([&job, &p] { job.fit = choose_shape_with(finished(std::move(job.samples)), p, nullptr, &job.warm); });
     Region r;
