@@ -151,6 +151,7 @@ int main(int argc, char** argv) {
         j["handle_vertices"] = s.edit.handle_vertices;
         j["free_vertices"] = s.edit.free_vertices;
         j["free_patches"] = s.edit.free.size();
+        j["extra_rings"] = s.edit.extra_rings;
         j["carried_patches"] = s.edit.carried.size();
         j["arap_iterations"] = s.edit.arap_iterations;
         j["factorization_reused"] = s.edit.factorization_reused;

@@ -46,8 +46,8 @@ int main(int argc, char** argv) {
   app.add_option("--support", o.imls_support_mm, "imls: support radius of a point, mm (default: 2.5 × voxel; 10 × the measured noise when that "
                  "exceeds 0.45 voxel, as on RGB-D frames)");
   app.add_option("--simplify", o.simplify_mm,
-                 "imls: decimate the mesh, moving the surface by at most this, mm (default: voxel / 10; 0 = off, "
-                 "the fastest)")->type_name("MM");
+                 "poisson, imls: decimate the mesh, moving the surface by at most this, mm (default: voxel / 10; "
+                 "0 = off: the fastest, 2.2-2.5x the faces)")->type_name("MM");
   app.add_option("--outliers", o.outlier_sigma,
                  "Statistical outlier removal threshold in standard deviations (0 = off)")->capture_default_str();
   app.add_option("--register", registration,

@@ -117,7 +117,7 @@ bool collapse_keeps_topology(const Mesh& m, Mesh::HalfedgeHandle h) {
   return !(m.is_boundary(v0) && m.is_boundary(v1) && !m.is_boundary(h) && !m.is_boundary(o));
 }
 
-std::size_t decimate(TriangleSoup& soup, double tolerance, const std::vector<char>* locked) {
+std::size_t decimate(TriangleSoup& soup, double tolerance, const std::vector<char>* locked, double max_aspect) {
   if (!(tolerance > 0) || soup.faces.empty()) return 0;
   DecimationMesh mesh;
   soup_to_mesh(soup, mesh);
@@ -137,7 +137,7 @@ std::size_t decimate(TriangleSoup& soup, double tolerance, const std::vector<cha
   // Non-binary: the quadric is the priority; collapses beyond the bound are illegal.
   dec.module(distance).set_tolerance(tolerance);
   dec.module(flipping).set_max_normal_deviation(15.0);
-  dec.module(aspect).set_aspect_ratio(8.0);
+  dec.module(aspect).set_aspect_ratio(max_aspect);
   if (!dec.initialize()) return 0;
   const std::size_t before = mesh.n_faces();
   dec.decimate();

@@ -34,7 +34,7 @@ struct ReconstructOptions {
   double outlier_sigma = 6.0;
   double mls_radius_mm = 0;   ///< moving-least-squares smoothing radius; 0 = off, < 0 = 3 × spacing
   double imls_support_mm = 0; ///< imls: support radius of a point; 0 = 2.5 × voxel, or 10 × the noise if that is above 0.45 voxel
-  double simplify_mm = -1;    ///< imls: decimation tolerance; 0 = off, < 0 = a tenth of the voxel
+  double simplify_mm = -1;    ///< poisson, imls: decimation tolerance; 0 = off, < 0 = a tenth of the voxel
 };
 
 struct ReconstructReport {
@@ -45,7 +45,7 @@ struct ReconstructReport {
   double spacing_mm = 0, voxel_mm = 0, trim_mm = 0, mls_radius_mm = 0;
   double imls_support_mm = 0;  ///< imls: the support radius used
   double imls_noise_mm = 0;    ///< imls: measured spread of the points along their normals (median RMS)
-  double simplify_mm = 0;      ///< imls: the decimation tolerance used (0: none)
+  double simplify_mm = 0;      ///< poisson, imls: the decimation tolerance used (0: none)
   int poisson_depth = 0;
   int poisson_block_depth = 0;  ///< Poisson solves and extracts in blocks of this octree depth
   std::size_t faces_before_trim = 0, faces = 0, vertices = 0;

@@ -44,9 +44,11 @@ RepairResult repair_mesh(const TriangleSoup& input, const RepairOptions& options
 
 /// Quadric-error decimation (OpenMesh Decimater) that never flips a normal, keeps the mesh
 /// manifold and stops when the next collapse would move the surface more than `tolerance` mm.
-/// Vertices marked in `locked` (by index, optional) are never moved or removed.
+/// Vertices marked in `locked` (by index, optional) are never moved or removed. No collapse leaves
+/// a triangle whose longest edge exceeds `max_aspect` times its height (OpenMesh's aspect ratio).
 /// Returns the number of faces removed.
-std::size_t decimate(TriangleSoup& soup, double tolerance, const std::vector<char>* locked = nullptr);
+std::size_t decimate(TriangleSoup& soup, double tolerance, const std::vector<char>* locked = nullptr,
+                     double max_aspect = 8.0);
 
 /// May the source of halfedge h collapse into its target without breaking the mesh's topology?
 /// OpenMesh's link condition (the test of TriConnectivity::is_collapse_ok), compiled here: Debian
