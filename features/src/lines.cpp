@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <tbb/parallel_for.h>
 
@@ -135,6 +136,24 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const std::vector<Eigen
   // edges over ρ ≈ 1.2 median edges (plate: the hole rims' chains lie 0.128–0.136 mm off the
   // plane ∩ cylinder circles, line_tol 0.133): the intersection is taken within twice line_tol.
   const double exact_tol = noisy ? 2 * line_tol : line_tol;
+  // On a noisy mesh a rounded edge no seed's shape grew over stays a freeform band between the two
+  // faces it joins, and a chain along the band meets one of them only: the edge it follows is that
+  // face's intersection with a shape on the band's far side. The shaped neighbours of each
+  // freeform region, from the line edges.
+  std::vector<std::vector<int>> across_band(seg.regions.size());
+  if (noisy) {
+    for (int e : line_edges) {
+      const auto [a, b] = pair[e];
+      if (a < 0) continue;
+      const bool fa = seg.regions[a].fit.shape.type == ShapeType::freeform;
+      const bool fb = seg.regions[b].fit.shape.type == ShapeType::freeform;
+      if (fa != fb) across_band[fa ? a : b].push_back(fa ? b : a);
+    }
+    for (auto& n : across_band) {
+      std::sort(n.begin(), n.end());
+      n.erase(std::unique(n.begin(), n.end()), n.end());
+    }
+  }
   for (auto& line : lines) {
     Samples s;
     for (int v : line.vertices) s.points.push_back(m.pos[v]);
@@ -150,6 +169,27 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const std::vector<Eigen
       if (exact.rms <= exact_tol) {
         fit = exact;
         continue;
+      }
+    }
+    if (noisy && line.region_b >= 0) {
+      const bool fa = seg.regions[line.region_a].fit.shape.type == ShapeType::freeform;
+      const bool fb = seg.regions[line.region_b].fit.shape.type == ShapeType::freeform;
+      if (fa != fb) {
+        const int shaped = fa ? line.region_b : line.region_a, band = fa ? line.region_a : line.region_b;
+        Fit best;
+        best.rms = std::numeric_limits<double>::infinity();
+        for (int other : across_band[band]) {
+          Fit c;
+          if (other == shaped ||
+              !intersection_curve(seg.regions[shaped].fit.shape, seg.regions[other].fit.shape, pts, line.closed, c.shape))
+            continue;
+          fit::finish(c, s);
+          if (c.rms < best.rms) best = c;
+        }
+        if (best.rms <= exact_tol) {
+          fit = best;
+          continue;
+        }
       }
     }
     if (!line.closed) {
