@@ -178,9 +178,12 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const std::vector<Eigen
         const int shaped = fa ? line.region_b : line.region_a, band = fa ? line.region_a : line.region_b;
         Fit best;
         best.rms = std::numeric_limits<double>::infinity();
+        // The chain lies within a band's width of the shape across it: the others (a band along
+        // every rounded edge of a part touches them all) are passed over on one distance.
+        const Eigen::Vector3d& middle = pts[pts.size() / 2];
         for (int other : across_band[band]) {
           Fit c;
-          if (other == shaped ||
+          if (other == shaped || !(distance(seg.regions[other].fit.shape, middle) <= 4 * exact_tol) ||
               !intersection_curve(seg.regions[shaped].fit.shape, seg.regions[other].fit.shape, pts, line.closed, c.shape))
             continue;
           fit::finish(c, s);
