@@ -140,20 +140,38 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const std::vector<Eigen
   // faces it joins, and a chain along the band meets one of them only: the edge it follows is that
   // face's intersection with a shape on the band's far side. The shaped neighbours of each
   // freeform region, from the line edges.
+  auto shapeless = [&](int r) { return seg.regions[r].fit.shape.type == ShapeType::freeform; };
   std::vector<std::vector<int>> across_band(seg.regions.size());
   if (noisy) {
     for (int e : line_edges) {
       const auto [a, b] = pair[e];
-      if (a < 0) continue;
-      const bool fa = seg.regions[a].fit.shape.type == ShapeType::freeform;
-      const bool fb = seg.regions[b].fit.shape.type == ShapeType::freeform;
-      if (fa != fb) across_band[fa ? a : b].push_back(fa ? b : a);
+      if (a < 0 || shapeless(a) == shapeless(b)) continue;
+      const int band = shapeless(a) ? a : b;
+      across_band[band].push_back(a + b - band);
     }
     for (auto& n : across_band) {
       std::sort(n.begin(), n.end());
       n.erase(std::unique(n.begin(), n.end()), n.end());
     }
   }
+  // The nearest such curve to a chain between shaped patch `shaped` and band `band` (rms
+  // infinite when there is none). The chain lies within a band's width of the shape across it:
+  // the others (a band along every rounded edge of a part touches them all) are passed over on
+  // one distance.
+  auto across = [&](int shaped, int band, const Samples& s, bool closed) {
+    Fit best;
+    best.rms = std::numeric_limits<double>::infinity();
+    const Eigen::Vector3d& middle = s.points[s.points.size() / 2];
+    for (int other : across_band[band]) {
+      Fit c;
+      if (other == shaped || !(distance(seg.regions[other].fit.shape, middle) <= 4 * exact_tol) ||
+          !intersection_curve(seg.regions[shaped].fit.shape, seg.regions[other].fit.shape, s.points, closed, c.shape))
+        continue;
+      fit::finish(c, s);
+      if (c.rms < best.rms) best = c;
+    }
+    return best;
+  };
   for (auto& line : lines) {
     Samples s;
     for (int v : line.vertices) s.points.push_back(m.pos[v]);
@@ -171,28 +189,13 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const std::vector<Eigen
         continue;
       }
     }
-    if (noisy && line.region_b >= 0) {
-      const bool fa = seg.regions[line.region_a].fit.shape.type == ShapeType::freeform;
-      const bool fb = seg.regions[line.region_b].fit.shape.type == ShapeType::freeform;
-      if (fa != fb) {
-        const int shaped = fa ? line.region_b : line.region_a, band = fa ? line.region_a : line.region_b;
-        Fit best;
-        best.rms = std::numeric_limits<double>::infinity();
-        // The chain lies within a band's width of the shape across it: the others (a band along
-        // every rounded edge of a part touches them all) are passed over on one distance.
-        const Eigen::Vector3d& middle = pts[pts.size() / 2];
-        for (int other : across_band[band]) {
-          Fit c;
-          if (other == shaped || !(distance(seg.regions[other].fit.shape, middle) <= 4 * exact_tol) ||
-              !intersection_curve(seg.regions[shaped].fit.shape, seg.regions[other].fit.shape, pts, line.closed, c.shape))
-            continue;
-          fit::finish(c, s);
-          if (c.rms < best.rms) best = c;
-        }
-        if (best.rms <= exact_tol) {
-          fit = best;
-          continue;
-        }
+    if (noisy && line.region_b >= 0 && shapeless(line.region_a) != shapeless(line.region_b)) {
+      const bool a_band = shapeless(line.region_a);
+      const Fit curve = across(a_band ? line.region_b : line.region_a, a_band ? line.region_a : line.region_b, s,
+                               line.closed);
+      if (curve.rms <= exact_tol) {
+        fit = curve;
+        continue;
       }
     }
     if (!line.closed) {

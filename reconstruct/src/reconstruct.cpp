@@ -137,6 +137,9 @@ double tangent_plane_noise(const OrientedCloud& in) {
 // The quadric decimation both cloud meshers end with (--simplify): bounded by a tenth of a voxel
 // by default, so the surface stays where it was while its faces drop to 40 % (imls) or about half
 // (Poisson). `max_aspect` bounds how long and thin its triangles may get.
+/// The triangles' aspect bound of each mesher's decimation (why 4 for Poisson: mesh_cloud).
+constexpr double kImlsMaxAspect = 8.0, kPoissonMaxAspect = 4.0;
+
 void simplify(TriangleSoup& soup, const ReconstructOptions& o, double voxel, double max_aspect,
               ReconstructReport& rep) {
   rep.simplify_mm = o.simplify_mm >= 0 ? o.simplify_mm : 0.1 * voxel;
@@ -170,7 +173,7 @@ Mesh mesh_cloud_imls(const OrientedCloud& in, const ReconstructOptions& o, Recon
   // face as a mesh of a voxel's triangles. A decimation bounded by a tenth of a voxel keeps the
   // surface where it was (the same accuracy) with 40 % of the faces, and the feature stage finds
   // more on it than on Poisson's meshes (bench/README.md, "imls").
-  simplify(soup, o, po.voxel, 8.0, rep);
+  simplify(soup, o, po.voxel, kImlsMaxAspect, rep);
   Mesh mesh;
   soup_to_mesh(soup, mesh);
   rep.faces = mesh.n_faces();
@@ -457,7 +460,7 @@ Mesh mesh_cloud(const OrientedCloud& in, const ReconstructOptions& o, Reconstruc
   // floor, no view saw). Triangles at most 4 times longer than high (imls: 8): with 8 the plate
   // scan's widened corner holes folded a long bottom triangle at their rim in the edit stage's
   // first solve, which then freed every patch of the part. bench/README.md, "Poisson decimated".
-  if (o.method == MeshMethod::poisson) simplify(soup, o, spacing, 4.0, rep);
+  if (o.method == MeshMethod::poisson) simplify(soup, o, spacing, kPoissonMaxAspect, rep);
   Mesh mesh;
   soup_to_mesh(soup, mesh);
   rep.faces = mesh.n_faces();
