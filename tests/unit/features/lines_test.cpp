@@ -61,13 +61,13 @@ Segmentation three_patches(const MeshArrays& m) {
   return seg;
 }
 
-/// The rim traced between the plane (region 0) and the band (region 1).
-const TracedLine& rim(const std::vector<TracedLine>& lines) {
+/// The rim traced between the plane (region 0) and the band (region 1). A copy: callers pass
+/// trace_lines' temporary result.
+TracedLine rim(const std::vector<TracedLine>& lines) {
   for (const auto& l : lines)
     if (l.region_a == 0 && l.region_b == 1) return l;
-  static const TracedLine none;
   ADD_FAILURE() << "no line between the plane and the band";
-  return none;
+  return {};
 }
 
 TEST(FeatureLines, ARimAlongAFreeformBandIsThePlaneMeetingTheShapeAcrossIt) {
@@ -77,13 +77,13 @@ TEST(FeatureLines, ARimAlongAFreeformBandIsThePlaneMeetingTheShapeAcrossIt) {
   const double tolerance = 0.05;
   // Noisy: the chain (r = 5.3) is taken as the plane's circle with the wall (r = 5), within
   // twice the line tolerance of it.
-  const TracedLine& noisy = rim(trace_lines(m, normals, seg, 25.0, tolerance, true));
+  const TracedLine noisy = rim(trace_lines(m, normals, seg, 25.0, tolerance, true));
   ASSERT_TRUE(noisy.closed);
   EXPECT_EQ(noisy.fit.shape.type, ShapeType::circle);
   EXPECT_NEAR(noisy.fit.shape.radius, kHole, 1e-9);
   EXPECT_NEAR(noisy.fit.shape.point.norm(), 0.0, 1e-9);
   // A clean mesh has no such bands: the chain is fitted as it lies.
-  const TracedLine& clean = rim(trace_lines(m, normals, seg, 25.0, tolerance, false));
+  const TracedLine clean = rim(trace_lines(m, normals, seg, 25.0, tolerance, false));
   EXPECT_EQ(clean.fit.shape.type, ShapeType::circle);
   EXPECT_NEAR(clean.fit.shape.radius, kBand, 1e-6);
 }
@@ -94,7 +94,7 @@ TEST(FeatureLines, TheShapeAcrossTheBandMustMeetThePlaneNearTheChain) {
   const MeshArrays m = build_arrays(rim_with_band());
   Segmentation seg = three_patches(m);
   seg.regions[2].fit.shape.radius = 3.0;
-  const TracedLine& line = rim(trace_lines(m, m.fnormal, seg, 25.0, 0.05, true));
+  const TracedLine line = rim(trace_lines(m, m.fnormal, seg, 25.0, 0.05, true));
   EXPECT_EQ(line.fit.shape.type, ShapeType::circle);
   EXPECT_NEAR(line.fit.shape.radius, kBand, 1e-6);
 }
