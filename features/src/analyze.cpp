@@ -22,6 +22,7 @@
 #include "s2c/features/constraints.h"
 #include "segment.h"
 #include "tensor_voting.h"
+#include "working_mesh.h"
 
 namespace s2c::features {
 namespace {
@@ -44,6 +45,9 @@ constexpr double kCleanNoise = 0.003;
 constexpr double kWideVoteNoise = 0.04;
 constexpr double kNarrowVoteEdges = 2.0, kWideVoteEdges = 3.0;
 
+/// The working mesh's cell is at most this many median edges of the mesh (kWorkingSlack).
+constexpr double kMaxCellEdges = 4.0;
+
 /// The default voting radius in median edge lengths. (On a noisy mesh the tensors only order the
 /// split's seeds and count the classes in the report: the patches, lines and constraints come from
 /// the filtered normals and the fits, so the vote need only be as wide as the noise demands.)
@@ -51,6 +55,16 @@ double vote_edges(bool noisy, double relative_noise) {
   if (!noisy) return 1.0;
   return relative_noise < kWideVoteNoise ? kNarrowVoteEdges : kWideVoteEdges;
 }
+
+/// A mesh whose noise is at least kWideVoteNoise of its edge, with more than this many times
+/// FeatureOptions::working_vertices, is analysed on a working mesh of that many (working_mesh.h).
+/// Below, the whole mesh takes under 2 s (about 10 s per million vertices). Such a mesh is finer
+/// than its noise: the full analysis votes three edges wide and smooths its normals over several,
+/// so it resolves nothing narrower than the working mesh's cell (at most kMaxCellEdges edges).
+/// A smoother mesh (a Poisson surface: noise 1.1-1.6 % of the edge) keeps its resolution: on the
+/// pocket scan's undecimated mesh (0.25 M vertices) a working mesh of 45 k found 9 of its 14
+/// primitives instead of 12 (bench/README, "a working mesh for large noisy meshes").
+constexpr int kWorkingSlack = 3;
 
 /// On noisy meshes, patches below this share of the surface area take no part in constraints.
 constexpr double kMinConstraintAreaShare = 0.002;
@@ -154,26 +168,6 @@ Analysis analyze_arrays(const MeshArrays& m, const FeatureOptions& o, nlohmann::
 
   out.noise = o.noise >= 0 ? o.noise : measure_noise(m);
   const bool noisy = out.noise > kCleanNoise * edge;
-  // Noise needs a wider vote and smoothed normals; a clean tessellation keeps its exact normals,
-  // so one edge is enough: a vertex's own faces always vote, and faces one edge away show a crease
-  // that passes next to it. Two edges found the same patches, lines and constraints on the
-  // fixture parts at twice the time (bench/README, "speed"), and widened the crease band.
-  out.radius = o.radius > 0 ? o.radius : vote_edges(noisy, out.noise / edge) * edge;
-  // (A reference, not a copy, of the face normals: 80 MB at 3.3 M faces.)
-  std::vector<Eigen::Vector3d> filtered;
-  if (noisy) filtered = filter_normals(m, 8, 0.35);
-  const std::vector<Eigen::Vector3d>& normals = noisy ? filtered : m.fnormal;
-  timings["normals"] = seconds_since(t);
-
-  t = Clock::now();
-  out.vertices = vote(m, normals, out.radius, voting_thresholds(o.min_crease_deg, noisy ? out.noise : 0.0, edge));
-  timings["tensor_voting"] = seconds_since(t);
-
-  t = Clock::now();
-  SegmentParams sp;
-  sp.min_crease_deg = o.min_crease_deg;
-  sp.noisy = noisy;
-  sp.diagonal = diag;
   // A reconstructed surface (Poisson) is smooth between its vertices, so the edge-local noise
   // misses its error, which is waviness a few edges wide: a tenth of an edge bounds it on noisy
   // meshes at the default reconstruction depth (fixture scans: plane RMS 0.015-0.02 mm at 0.26 mm
@@ -183,13 +177,64 @@ Analysis analyze_arrays(const MeshArrays& m, const FeatureOptions& o, nlohmann::
   const double waviness = noisy && o.fit_tolerance <= 0 ? measure_waviness(m) : 0.0;
   const double floor = std::max({2e-4 * diag, noisy ? kWavinessPerEdge * edge : 0.0, kWavinessFactor * waviness});
   out.fit_tolerance = o.fit_tolerance > 0 ? o.fit_tolerance : std::max(3.0 * out.noise, floor);
-  sp.tolerance = out.fit_tolerance;
-  sp.normal_tol_deg = noisy ? 20.0 : 10.0;
-  const Segmentation seg = segment(m, normals, out.vertices, sp);
-  timings["patches"] = seconds_since(t);
+  timings["noise"] = seconds_since(t);
+  t = Clock::now();
+
+  // A large noisy mesh is analysed on a coarser copy (working_mesh.h); the tolerance above stays
+  // the fine mesh's, the vote's radius and thresholds are the copy's own.
+  std::optional<WorkingMesh> working;
+  if (out.noise >= kWideVoteNoise * edge && o.working_vertices > 0 && m.vertices() > kWorkingSlack * o.working_vertices) {
+    working = coarsen(m, o.working_vertices, kMaxCellEdges * edge);
+    // Most of the mesh collapsed (debris: pieces smaller than a cell): no copy to analyse.
+    if (working->arrays.faces() < o.working_vertices / 2) working.reset();
+    timings["working_mesh"] = seconds_since(t);
+    t = Clock::now();
+  }
+  const MeshArrays& a = working ? working->arrays : m;
+  const double a_edge = working && a.median_edge > 0 ? a.median_edge : edge;
+  const double a_noise = working ? measure_noise(a) : out.noise;
+  // Noise needs a wider vote and smoothed normals; a clean tessellation keeps its exact normals,
+  // so one edge is enough: a vertex's own faces always vote, and faces one edge away show a crease
+  // that passes next to it. Two edges found the same patches, lines and constraints on the
+  // fixture parts at twice the time (bench/README, "speed"), and widened the crease band.
+  out.radius = o.radius > 0 ? o.radius : vote_edges(noisy, a_noise / a_edge) * a_edge;
+  // (A reference, not a copy, of the face normals: 80 MB at 3.3 M faces.)
+  std::vector<Eigen::Vector3d> filtered;
+  if (noisy) filtered = filter_normals(a, 8, 0.35);
+  const std::vector<Eigen::Vector3d>& normals = noisy ? filtered : a.fnormal;
+  timings["normals"] = seconds_since(t);
 
   t = Clock::now();
-  const std::vector<TracedLine> traced = trace_lines(m, normals, seg, o.min_crease_deg, out.fit_tolerance, noisy);
+  std::vector<VertexTensor> tensors = vote(a, normals, out.radius, voting_thresholds(o.min_crease_deg, noisy ? a_noise : 0.0, a_edge));
+  timings["tensor_voting"] = seconds_since(t);
+
+  t = Clock::now();
+  SegmentParams sp;
+  sp.min_crease_deg = o.min_crease_deg;
+  sp.noisy = noisy;
+  sp.diagonal = diag;
+  sp.tolerance = out.fit_tolerance;
+  sp.normal_tol_deg = noisy ? 20.0 : 10.0;
+  Segmentation seg = segment(a, normals, tensors, sp);
+  timings["patches"] = seconds_since(t);
+
+  std::vector<Eigen::Vector3d> fine_normals;
+  if (working) {
+    t = Clock::now();
+    // The border moves by up to a working edge; a face ring more covers the crease's zigzag.
+    const int passes = static_cast<int>(std::ceil(working->cell / edge)) + 1;
+    seg = map_back(m, *working, seg, out.fit_tolerance, passes);
+    fine_normals = map_back_normals(m, *working, normals);
+    out.vertices.resize(m.vertices());
+    tbb::parallel_for(0, m.vertices(), [&](int v) { out.vertices[v] = tensors[working->vertex_cluster[v]]; });
+    timings["map_back"] = seconds_since(t);
+  } else {
+    out.vertices = std::move(tensors);
+  }
+
+  t = Clock::now();
+  const std::vector<TracedLine> traced =
+      trace_lines(m, working ? fine_normals : normals, seg, o.min_crease_deg, out.fit_tolerance, noisy);
   timings["lines"] = seconds_since(t);
 
   FeatureSet& f = out.features;
@@ -259,6 +304,9 @@ Analysis analyze_arrays(const MeshArrays& m, const FeatureOptions& o, nlohmann::
     (*report)["voting_radius_mm"] = out.radius;
     (*report)["fit_tolerance_mm"] = out.fit_tolerance;
     if (waviness > 0) (*report)["waviness_mm"] = waviness;
+    if (working)
+      (*report)["working_mesh"] = {{"vertices", working->arrays.vertices()}, {"faces", working->arrays.faces()},
+                                   {"cell_mm", working->cell}, {"noise_mm", a_noise}};
     (*report)["vertices"] = {{"face", classes[0]}, {"crease", classes[1]}, {"corner", classes[2]}};
     (*report)["patches"] = f.patches.size();
     (*report)["patch_types"] = patch_types;
