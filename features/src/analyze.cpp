@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <optional>
 
@@ -218,13 +219,13 @@ Analysis analyze_arrays(const MeshArrays& m, const FeatureOptions& o, nlohmann::
   Segmentation seg = segment(a, normals, tensors, sp);
   timings["patches"] = seconds_since(t);
 
-  std::vector<Eigen::Vector3d> fine_normals;
+  std::optional<MappedNormals> fine_normals;
   if (working) {
     t = Clock::now();
     // The border moves by up to a working edge; a face ring more covers the crease's zigzag.
     const int passes = static_cast<int>(std::ceil(working->cell / edge)) + 1;
     seg = map_back(m, *working, seg, out.fit_tolerance, passes);
-    fine_normals = map_back_normals(m, *working, normals);
+    fine_normals.emplace(m, *working, normals);
     out.vertices.resize(m.vertices());
     tbb::parallel_for(0, m.vertices(), [&](int v) { out.vertices[v] = tensors[working->vertex_cluster[v]]; });
     timings["map_back"] = seconds_since(t);
@@ -234,7 +235,8 @@ Analysis analyze_arrays(const MeshArrays& m, const FeatureOptions& o, nlohmann::
 
   t = Clock::now();
   const std::vector<TracedLine> traced =
-      trace_lines(m, working ? fine_normals : normals, seg, o.min_crease_deg, out.fit_tolerance, noisy);
+      working ? trace_lines(m, std::cref(*fine_normals), seg, o.min_crease_deg, out.fit_tolerance, noisy)
+              : trace_lines(m, normals, seg, o.min_crease_deg, out.fit_tolerance, noisy);
   timings["lines"] = seconds_since(t);
 
   FeatureSet& f = out.features;

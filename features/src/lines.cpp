@@ -58,8 +58,8 @@ bool intersection_curve(const Shape& a, const Shape& b, const std::vector<Eigen:
 
 }  // namespace
 
-std::vector<TracedLine> trace_lines(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals,
-                                    const Segmentation& seg, double min_crease_deg, double tolerance, bool noisy) {
+std::vector<TracedLine> trace_lines(const MeshArrays& m, const FaceNormal& normal, const Segmentation& seg,
+                                    double min_crease_deg, double tolerance, bool noisy) {
   const int ne = static_cast<int>(m.edges.size()), nv = m.vertices();
   const double cos_min = std::cos(min_crease_deg * M_PI / 180.0);
   // Line edges and the (sorted) pair of patches each one separates, decided per edge in parallel
@@ -73,8 +73,8 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const std::vector<Eigen
       if (a == b) continue;
       if (b >= 0) {
         const Eigen::Vector3d mid = 0.5 * (m.pos[E.v0] + m.pos[E.v1]);
-        const Eigen::Vector3d na = oriented_normal(seg.regions[a], mid, normals[E.f0]);
-        const Eigen::Vector3d nb = oriented_normal(seg.regions[b], mid, normals[E.f1]);
+        const Eigen::Vector3d na = oriented_normal(seg.regions[a], mid, normal(E.f0));
+        const Eigen::Vector3d nb = oriented_normal(seg.regions[b], mid, normal(E.f1));
         if (na.dot(nb) > cos_min) continue;  // a smooth (tangent) junction of two patches is no line
       }
       pair[e] = {std::min(a, b), std::max(a, b)};

@@ -143,12 +143,16 @@ std::vector<Eigen::Vector3d> place_clusters(const MeshArrays& m, const std::vect
     Eigen::Vector3d b = Eigen::Vector3d::Zero(), sum = Eigen::Vector3d::Zero();
     int count = 0;
   };
-  // The faces in order (a stream through memory), in blocks on all cores, each into its own
-  // sums; a face counts once per cluster it touches.
-  tbb::enumerable_thread_specific<std::vector<Quadric>> partial([&] { return std::vector<Quadric>(clusters); });
-  tbb::parallel_for(tbb::blocked_range<int>(0, m.faces(), 1 << 15), [&](const tbb::blocked_range<int>& range) {
-    std::vector<Quadric>& q = partial.local();
-    for (int f = range.begin(); f < range.end(); ++f) {
+  // The faces in order (a stream through memory), in kChunks fixed ranges side by side, each
+  // summed in face order into its own sums, which are then added in chunk order: the same bits
+  // whatever the threads (TBB's own partial sums would follow its scheduling). A face counts once
+  // per cluster it touches.
+  constexpr int kChunks = 2;
+  std::vector<std::vector<Quadric>> partial(kChunks, std::vector<Quadric>(clusters));
+  tbb::parallel_for(0, kChunks, [&](int chunk) {
+    std::vector<Quadric>& q = partial[chunk];
+    const int end = static_cast<int>(static_cast<long>(m.faces()) * (chunk + 1) / kChunks);
+    for (int f = static_cast<int>(static_cast<long>(m.faces()) * chunk / kChunks); f < end; ++f) {
       const Eigen::Vector3d& n = m.fnormal[f];
       const double w = m.farea[f], d = n.dot(m.pos[m.tri[f][0]]);
       const Eigen::Matrix3d nn = w * n * n.transpose();
@@ -160,9 +164,9 @@ std::vector<Eigen::Vector3d> place_clusters(const MeshArrays& m, const std::vect
       }
     }
   });
-  std::vector<Quadric> q(clusters);
-  for (const auto& part : partial)
-    tbb::parallel_for(0, clusters, [&](int k) { q[k].a += part[k].a, q[k].b += part[k].b; });
+  std::vector<Quadric>& q = partial[0];
+  for (int chunk = 1; chunk < kChunks; ++chunk)
+    tbb::parallel_for(0, clusters, [&](int k) { q[k].a += partial[chunk][k].a, q[k].b += partial[chunk][k].b; });
   for (int v = 0; v < m.vertices(); ++v) q[cluster[v]].sum += m.pos[v], ++q[cluster[v]].count;
   std::vector<Eigen::Vector3d> pos(clusters);
   tbb::parallel_for(0, clusters, [&](int k) {
@@ -237,8 +241,7 @@ WorkingMesh coarsen(const MeshArrays& fine, int target_vertices, double max_cell
     int face;
     bool operator<(const Corner& o) const { return std::tie(c, flipped, face) < std::tie(o.c, o.flipped, o.face); }
   };
-  std::vector<Corner> kept;
-  kept.reserve(fine.faces());
+  std::vector<Corner> kept;  // (a few per cent of the faces: not reserved for all)
   for (int f = 0; f < fine.faces(); ++f) {
     std::array<int, 3> c{w.vertex_cluster[fine.tri[f][0]], w.vertex_cluster[fine.tri[f][1]], w.vertex_cluster[fine.tri[f][2]]};
     if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) continue;
@@ -406,25 +409,23 @@ Segmentation map_back(const MeshArrays& fine, const WorkingMesh& w, const Segmen
   return seg;
 }
 
-std::vector<Eigen::Vector3d> map_back_normals(const MeshArrays& fine, const WorkingMesh& w,
-                                              const std::vector<Eigen::Vector3d>& coarse_normals) {
+MappedNormals::MappedNormals(const MeshArrays& fine, const WorkingMesh& w, const std::vector<Eigen::Vector3d>& coarse_normals)
+    : fine_(fine), w_(w), coarse_normals_(coarse_normals), at_cluster_(w.arrays.vertices()) {
   // A collapsed face (most of them: a cluster holds many faces) takes the area-weighted normal
   // around its first vertex's cluster: its own is as noisy as the mesh, and trace_lines orients
   // the patches' normals by it, so one that is far off makes a line edge of a tangent junction.
   const MeshArrays& c = w.arrays;
-  std::vector<Eigen::Vector3d> at_vertex(c.vertices());
   tbb::parallel_for(0, c.vertices(), [&](int v) {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (int k = c.vf_start[v]; k < c.vf_start[v + 1]; ++k) sum += c.farea[c.vf[k]] * coarse_normals[c.vf[k]];
-    at_vertex[v] = sum.normalized();
+    at_cluster_[v] = sum.normalized();
   });
-  std::vector<Eigen::Vector3d> n(fine.faces());
-  tbb::parallel_for(0, fine.faces(), [&](int f) {
-    const int own = w.face_of[f];
-    const Eigen::Vector3d& around = at_vertex[w.vertex_cluster[fine.tri[f][0]]];
-    n[f] = own >= 0 ? coarse_normals[own] : around.allFinite() ? around : fine.fnormal[f];
-  });
-  return n;
+}
+
+Eigen::Vector3d MappedNormals::operator()(int face) const {
+  if (w_.face_of[face] >= 0) return coarse_normals_[w_.face_of[face]];
+  const Eigen::Vector3d& around = at_cluster_[w_.vertex_cluster[fine_.tri[face][0]]];
+  return around.allFinite() ? around : fine_.fnormal[face];
 }
 
 }  // namespace s2c::features

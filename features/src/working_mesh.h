@@ -38,8 +38,18 @@ Segmentation map_back(const MeshArrays& fine, const WorkingMesh& w, const Segmen
                       int passes);
 
 /// Per fine face, the working mesh's (filtered) normal of its coarse face; where it collapsed, the
-/// working mesh's normal at its first vertex's cluster.
-std::vector<Eigen::Vector3d> map_back_normals(const MeshArrays& fine, const WorkingMesh& w,
-                                              const std::vector<Eigen::Vector3d>& coarse_normals);
+/// working mesh's normal at its first vertex's cluster (trace_lines' FaceNormal).
+class MappedNormals {
+ public:
+  /// Holds references to all three.
+  MappedNormals(const MeshArrays& fine, const WorkingMesh& w, const std::vector<Eigen::Vector3d>& coarse_normals);
+  Eigen::Vector3d operator()(int face) const;
+
+ private:
+  const MeshArrays& fine_;
+  const WorkingMesh& w_;
+  const std::vector<Eigen::Vector3d>& coarse_normals_;
+  std::vector<Eigen::Vector3d> at_cluster_;
+};
 
 }  // namespace s2c::features

@@ -1,6 +1,7 @@
 // The working mesh of a large noisy mesh (features/src/working_mesh.h): the clustered copy is a
 // closed manifold near the part's surface, and the analysis on it finds what the full mesh gives.
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <nlohmann/json.hpp>
 
@@ -80,6 +81,22 @@ TEST(WorkingMesh, IsAClosedManifoldNearThePartWithCreasesKept) {
   EXPECT_LT(sum / c.vertices(), 0.1 * h);
   EXPECT_LT(worst, 0.6 * h);
   EXPECT_LT(worst, 0.25 * w.cell);
+}
+
+TEST(WorkingMesh, IsTheSameOnOneThreadAndOnTwo) {
+  const Mesh m = noisy("bracket", 0.2);
+  const MeshArrays fine = build_arrays(m);
+  auto on = [&](int threads) {
+    tbb::task_arena arena(threads);
+    WorkingMesh w;
+    arena.execute([&] { w = coarsen(fine, fine.vertices() / 8, 1e9); });
+    return w;
+  };
+  const WorkingMesh one = on(1), two = on(2);
+  EXPECT_EQ(one.vertex_cluster, two.vertex_cluster);
+  EXPECT_EQ(one.face_of, two.face_of);
+  ASSERT_EQ(one.arrays.vertices(), two.arrays.vertices());
+  for (int v = 0; v < one.arrays.vertices(); ++v) ASSERT_EQ(one.arrays.pos[v], two.arrays.pos[v]) << "cluster " << v;
 }
 
 /// A part refined to edges of diagonal/`div`, noise 0.2 mean edges (the σ = 0.2h), with
