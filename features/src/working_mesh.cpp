@@ -313,7 +313,8 @@ Segmentation map_back(const MeshArrays& fine, const WorkingMesh& w, const Segmen
       candidates.clear();
       for (int k : {k0, k1, k2})
         for (const auto& [r, faces] : around[k]) {
-          auto it = std::find_if(candidates.begin(), candidates.end(), [&](const auto& x) { return x.first == r; });
+          auto it = candidates.begin();
+          while (it != candidates.end() && it->first != r) ++it;
           if (it == candidates.end()) candidates.emplace_back(r, faces);
           else it->second += faces;
         }
