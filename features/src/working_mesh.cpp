@@ -186,6 +186,15 @@ std::vector<Eigen::Vector3d> place_clusters(const MeshArrays& m, const std::vect
   return pos;
 }
 
+/// Adds `n` to the count of `region` in a short list of (region, count), in order of first
+/// appearance (a face or a cluster has few regions about it).
+void tally(std::vector<std::pair<int, int>>& counts, int region, int n) {
+  auto it = counts.begin();
+  while (it != counts.end() && it->first != region) ++it;
+  if (it == counts.end()) counts.emplace_back(region, n);
+  else it->second += n;
+}
+
 /// Faces with a neighbour across an edge in another region, in increasing order.
 std::vector<int> border_faces(const MeshArrays& m, const std::vector<int>& region) {
   std::vector<char> border(m.faces(), 0);
@@ -292,12 +301,7 @@ Segmentation map_back(const MeshArrays& fine, const WorkingMesh& w, const Segmen
   std::vector<std::vector<std::pair<int, int>>> around(c.vertices());
   std::vector<int> only(c.vertices(), -1);
   tbb::parallel_for(0, c.vertices(), [&](int k) {
-    for (int i = c.vf_start[k]; i < c.vf_start[k + 1]; ++i) {
-      const int r = coarse.face_region[c.vf[i]];
-      auto it = std::find_if(around[k].begin(), around[k].end(), [&](const auto& x) { return x.first == r; });
-      if (it == around[k].end()) around[k].emplace_back(r, 1);
-      else ++it->second;
-    }
+    for (int i = c.vf_start[k]; i < c.vf_start[k + 1]; ++i) tally(around[k], coarse.face_region[c.vf[i]], 1);
     if (around[k].size() == 1) only[k] = around[k].front().first;
   });
   tbb::parallel_for(tbb::blocked_range<int>(0, nf, 4096), [&](const tbb::blocked_range<int>& range) {
@@ -312,12 +316,7 @@ Segmentation map_back(const MeshArrays& fine, const WorkingMesh& w, const Segmen
       }
       candidates.clear();
       for (int k : {k0, k1, k2})
-        for (const auto& [r, faces] : around[k]) {
-          auto it = candidates.begin();
-          while (it != candidates.end() && it->first != r) ++it;
-          if (it == candidates.end()) candidates.emplace_back(r, faces);
-          else it->second += faces;
-        }
+        for (const auto& [r, faces] : around[k]) tally(candidates, r, faces);
       if (candidates.empty()) continue;
       int best = -1, most = candidates.front().first, most_faces = 0;
       double nearest = 3 * tolerance;
@@ -379,21 +378,13 @@ Segmentation map_back(const MeshArrays& fine, const WorkingMesh& w, const Segmen
   // whose vertices' faces are mostly of one other region joins it (a mode filter over the faces
   // around its three vertices, a face across an edge counted twice).
   relabel(fine, region, border_faces(fine, region), kModePasses, [&](int f) {
-    std::array<std::pair<int, int>, 48> count;  // (region, faces); a vertex has few regions about it
-    int kinds = 0, total = 0;
+    thread_local std::vector<std::pair<int, int>> count;  // (region, faces)
+    count.clear();
+    int total = 0;
     for (int v : fine.tri[f])
-      for (int k = fine.vf_start[v]; k < fine.vf_start[v + 1]; ++k) {
-        const int r = region[fine.vf[k]];
-        int i = 0;
-        while (i < kinds && count[i].first != r) ++i;
-        if (i == kinds) {
-          if (kinds == static_cast<int>(count.size())) continue;
-          count[kinds++] = {r, 0};
-        }
-        ++count[i].second, ++total;
-      }
-    for (int i = 0; i < kinds; ++i)
-      if (count[i].first != region[f] && 2 * count[i].second > total) return count[i].first;
+      for (int k = fine.vf_start[v]; k < fine.vf_start[v + 1]; ++k) tally(count, region[fine.vf[k]], 1), ++total;
+    for (const auto& [r, n] : count)
+      if (r != region[f] && 2 * n > total) return r;
     return region[f];
   });
 

@@ -134,12 +134,12 @@ double tangent_plane_noise(const OrientedCloud& in) {
   return rms[rms.size() / 2];
 }
 
-// The quadric decimation both cloud meshers end with (--simplify): bounded by a tenth of a voxel
-// by default, so the surface stays where it was while its faces drop to 40 % (imls) or about half
-// (Poisson). `max_aspect` bounds how long and thin its triangles may get.
 /// The triangles' aspect bound of each mesher's decimation (why 4 for Poisson: mesh_cloud).
 constexpr double kImlsMaxAspect = 8.0, kPoissonMaxAspect = 4.0;
 
+// The quadric decimation both cloud meshers end with (--simplify): bounded by a tenth of a voxel
+// by default, so the surface stays where it was while its faces drop to 40 % (imls) or about half
+// (Poisson). `max_aspect` bounds how long and thin its triangles may get.
 void simplify(TriangleSoup& soup, const ReconstructOptions& o, double voxel, double max_aspect,
               ReconstructReport& rep) {
   rep.simplify_mm = o.simplify_mm >= 0 ? o.simplify_mm : 0.1 * voxel;
