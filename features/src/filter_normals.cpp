@@ -4,12 +4,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <vector>
 
 #include <tbb/parallel_for.h>
 
+#include "fit_passes.h"
 #include "vector_math.h"
+#include "vector_median.h"
 
 namespace s2c::features {
 namespace {
@@ -37,6 +38,7 @@ std::vector<Eigen::Vector3d> filter_normals(const MeshArrays& m, int iterations,
   // therefore compare neighbours with a guide, the vector median of the 1-ring (the ring normal
   // closest to all others, area-weighted), which ignores outliers yet stays on one side of a crease.
   constexpr int kGuidedIterations = 2;
+  const bool avx = fit::have_avx_passes();
   // The rings (faces sharing a vertex with f, sorted), built once for all iterations: CSR.
   std::vector<int> ring_start(m.faces() + 1, 0), rings;
   {
@@ -58,7 +60,7 @@ std::vector<Eigen::Vector3d> filter_normals(const MeshArrays& m, int iterations,
     const bool guided = it < kGuidedIterations;
     tbb::parallel_for(tbb::blocked_range<int>(0, m.faces(), 512), [&](const tbb::blocked_range<int>& range) {
       std::vector<int> ring;
-      std::vector<double> apart;  // |n[a] − n[b]| over the ring and f, each pair computed once
+      RingColumns columns;
       std::vector<double> weight;
       for (int f = range.begin(); f < range.end(); ++f) {
         // The ring, then f itself: the faces the guide is chosen from and the weights are taken over.
@@ -66,17 +68,10 @@ std::vector<Eigen::Vector3d> filter_normals(const MeshArrays& m, int iterations,
         ring.push_back(f);
         Eigen::Vector3d guide = n[f];
         if (guided) {
-          const std::size_t k = ring.size();
-          apart.assign(k * k, 0.0);
-          for (std::size_t i = 0; i < k; ++i)
-            for (std::size_t j = i + 1; j < k; ++j)
-              apart[i * k + j] = apart[j * k + i] = (n[ring[i]] - n[ring[j]]).norm();
-          double best = std::numeric_limits<double>::infinity();
-          for (std::size_t i = 0; i < k; ++i) {
-            double cost = 0;
-            for (std::size_t j = 0; j < k; ++j) cost += m.farea[ring[j]] * apart[i * k + j];
-            if (cost < best) best = cost, guide = n[ring[i]];
-          }
+          columns.clear();
+          for (int g : ring) columns.add(n[g], m.farea[g]);
+          const int median = columns.median(avx);
+          if (median >= 0) guide = n[ring[median]];
         }
         // The weights' exponents, then all their exponentials in one call to the vectorised exp
         // (as the tensor vote takes its weights).
