@@ -63,6 +63,7 @@ S2C_AVX int RingColumns::median_avx() {
       const __m256d sq = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
       _mm256_storeu_pd(&apart_[static_cast<std::size_t>(j) * kp + i], _mm256_sqrt_pd(sq));
     }
+    apart_[static_cast<std::size_t>(j) * kp + j] = 0.0;  // (as on SSE2, even for a normal that is not finite)
   }
   double cost[4];
   int best = -1;
