@@ -57,15 +57,24 @@ double vote_edges(bool noisy, double relative_noise) {
   return relative_noise < kWideVoteNoise ? kNarrowVoteEdges : kWideVoteEdges;
 }
 
-/// A mesh whose noise is at least kWideVoteNoise of its edge, with more than this many times
-/// FeatureOptions::working_vertices, is analysed on a working mesh of that many (working_mesh.h).
-/// Below, the whole mesh takes under 2 s (about 10 s per million vertices). Such a mesh is finer
-/// than its noise: the full analysis votes three edges wide and smooths its normals over several,
-/// so it resolves nothing narrower than the working mesh's cell (at most kMaxCellEdges edges).
-/// A smoother mesh (a Poisson surface: noise 1.1-1.6 % of the edge) keeps its resolution: on the
-/// pocket scan's undecimated mesh (0.25 M vertices) a working mesh of 45 k found 9 of its 14
-/// primitives instead of 12 (bench/README, "a working mesh for large noisy meshes").
+/// A noisy mesh with more than this many times FeatureOptions::working_vertices vertices is analysed
+/// on a working mesh (working_mesh.h). Below, the whole mesh takes under 2 s (about 10 s per
+/// million vertices). A mesh whose noise is at least kWideVoteNoise of its edge is finer than its
+/// noise: the full analysis votes three edges wide and smooths its normals over several, so it
+/// resolves nothing narrower than the working mesh's cell (at most kMaxCellEdges edges), and the
+/// working mesh has working_vertices vertices.
 constexpr int kWorkingSlack = 3;
+
+/// A smoother mesh (a Poisson surface: noise 1.1-2.2 % of the edge) resolves more: its working
+/// mesh keeps one vertex in this many.
+constexpr int kSmoothReduction = 6;
+
+/// The working mesh's target vertices for a mesh of `relative_noise` (noise / median edge), or 0
+/// for none: only noisy meshes larger than kWorkingSlack times `working_vertices` have one.
+int working_target(int vertices, double relative_noise, int working_vertices) {
+  if (working_vertices <= 0 || relative_noise <= kCleanNoise || vertices <= kWorkingSlack * working_vertices) return 0;
+  return relative_noise >= kWideVoteNoise ? working_vertices : std::max(working_vertices, vertices / kSmoothReduction);
+}
 
 /// On noisy meshes, patches below this share of the surface area take no part in constraints.
 constexpr double kMinConstraintAreaShare = 0.002;
@@ -184,10 +193,11 @@ Analysis analyze_arrays(const MeshArrays& m, const FeatureOptions& o, nlohmann::
   // A large noisy mesh is analysed on a coarser copy (working_mesh.h); the tolerance above stays
   // the fine mesh's, the vote's radius and thresholds are the copy's own.
   std::optional<WorkingMesh> working;
-  if (out.noise >= kWideVoteNoise * edge && o.working_vertices > 0 && m.vertices() > kWorkingSlack * o.working_vertices) {
-    working = coarsen(m, o.working_vertices, kMaxCellEdges * edge);
+  const bool smooth = out.noise < kWideVoteNoise * edge;
+  if (const int target = working_target(m.vertices(), out.noise / edge, o.working_vertices); target > 0) {
+    working = coarsen(m, target, kMaxCellEdges * edge, smooth);
     // Most of the mesh collapsed (debris: pieces smaller than a cell): no copy to analyse.
-    if (working->arrays.faces() < o.working_vertices / 2) working.reset();
+    if (working->arrays.faces() < target / 2) working.reset();
     timings["working_mesh"] = seconds_since(t);
     t = Clock::now();
   }
@@ -216,6 +226,7 @@ Analysis analyze_arrays(const MeshArrays& m, const FeatureOptions& o, nlohmann::
   sp.diagonal = diag;
   sp.tolerance = out.fit_tolerance;
   sp.normal_tol_deg = noisy ? 20.0 : 10.0;
+  if (working && smooth) sp.face_scale = static_cast<double>(m.faces()) / std::max(a.faces(), 1);
   Segmentation seg = segment(a, normals, tensors, sp);
   timings["patches"] = seconds_since(t);
 
@@ -225,6 +236,8 @@ Analysis analyze_arrays(const MeshArrays& m, const FeatureOptions& o, nlohmann::
     // The border moves by up to a working edge; a face ring more covers the crease's zigzag.
     const int passes = static_cast<int>(std::ceil(working->cell / edge)) + 1;
     seg = map_back(m, *working, seg, out.fit_tolerance, passes);
+    // A smooth mesh's own normals are as good as the working mesh's filtered ones.
+    if (smooth) refit_regions(m, m.fnormal, sp, seg);
     fine_normals.emplace(m, *working, normals);
     out.vertices.resize(m.vertices());
     tbb::parallel_for(0, m.vertices(), [&](int v) { out.vertices[v] = tensors[working->vertex_cluster[v]]; });

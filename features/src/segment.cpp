@@ -30,6 +30,8 @@ constexpr double kChamferPreference = 1.15;
 constexpr double kBandTurnRad = M_PI / 2;
 /// Smallest patch on a noisy mesh: fewer faces cannot pin down a primitive against the noise.
 constexpr std::size_t kMinNoisyPatchFaces = 30;
+/// ... and on a working mesh never fewer than this (SegmentParams::face_scale).
+constexpr double kMinCoarsePatchFaces = 6.0;
 constexpr double kFreeformCrumbShare = 0.01;
 /// Seed neighbourhood of the fit-driven split: up to kSeedRings rings, stopping at kSeedFaces.
 constexpr int kSeedRings = 8;
@@ -317,6 +319,65 @@ Fit choose_shape_with(const Samples& s, const SegmentParams& p, const Fit* known
 }  // namespace
 
 Fit choose_shape(const Samples& s, const SegmentParams& p) { return choose_shape_with(s, p, nullptr); }
+
+namespace {
+
+/// refit_regions: samples farther than this many tolerances from a shape are a rounded crease's,
+/// not the shape's ...
+constexpr double kTrimTolerances = 3.0;
+/// ... and the shape holds when they are at most this share of the region's sample weight.
+constexpr double kTrimmedShare = 0.1;
+/// Samples per region for the refit (a stratified subsample of larger regions).
+constexpr std::size_t kRefitSamples = 4000;
+
+/// The samples of `s` within kTrimTolerances of `shape`, or none when more than kTrimmedShare of
+/// the weight lies beyond.
+std::optional<Samples> near_samples(const Samples& s, const Shape& shape, double tolerance) {
+  Samples kept;
+  double total = 0, near = 0;
+  for (std::size_t i = 0; i < s.points.size(); ++i) {
+    total += s.weights[i];
+    if (!(distance(shape, s.points[i]) <= kTrimTolerances * tolerance)) continue;
+    near += s.weights[i];
+    kept.points.push_back(s.points[i]);
+    kept.normals.push_back(s.normals[i]);
+    kept.weights.push_back(s.weights[i]);
+  }
+  if (kept.points.empty() || near < (1.0 - kTrimmedShare) * total) return std::nullopt;
+  return kept;
+}
+
+}  // namespace
+
+void refit_regions(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, const SegmentParams& p,
+                   Segmentation& seg) {
+  tbb::parallel_for(0, static_cast<int>(seg.regions.size()), [&](int r) {
+    Region& region = seg.regions[r];
+    if (region.faces.size() < kMinNoisyPatchFaces) return;
+    const Samples all = thinned(region_samples(m, normals, region.faces), kRefitSamples);
+    if (region.fit.shape.type != ShapeType::freeform) {
+      // The working mesh's shape, refined on the fine samples near it.
+      const auto near = near_samples(all, region.fit.shape, p.tolerance);
+      Fit fit;
+      if (near && may_refit(region.fit.shape, *near, p, fit)) region.fit = fit;
+      return;
+    }
+    // A freeform region of the working mesh: each type's fit to all its samples, then the shape
+    // chosen among the samples near it (the simplest type first, as choose_shape).
+    const fit::SurfaceFits fits(all);
+    for (ShapeType type : {ShapeType::plane, ShapeType::sphere, ShapeType::cylinder, ShapeType::cone}) {
+      const Fit rough = fits.fit(type);
+      if (!rough.ok) continue;
+      const auto near = near_samples(all, rough.shape, p.tolerance);
+      if (!near) continue;
+      const Fit fit = choose_shape(*near, p);
+      if (fit.shape.type != ShapeType::freeform) {
+        region.fit = fit;
+        return;
+      }
+    }
+  });
+}
 
 namespace {
 
@@ -619,8 +680,10 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
     // Crumbs along worn creases (a few faces the growth or the split left over) are no patches:
     // their faces go to the neighbours that explain them best.
     // Small freeform leftovers of the split (a noisy band along a crease) go the same way.
+    const double least = p.face_scale > 1.0 ? std::max(kMinCoarsePatchFaces, kMinNoisyPatchFaces / p.face_scale)
+                                             : static_cast<double>(kMinNoisyPatchFaces);
     auto crumb = [&](const Region& r) {
-      return r.faces.size() < kMinNoisyPatchFaces ||
+      return static_cast<double>(r.faces.size()) < least ||
              (r.fit.shape.type == ShapeType::freeform && r.faces.size() < kFreeformCrumbShare * nf);
     };
     const std::size_t before = seg.regions.size();

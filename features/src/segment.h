@@ -18,6 +18,10 @@ struct SegmentParams {
   double normal_tol_deg = 10.0;  ///< fit acceptance RMS normal angle
   bool noisy = false;            ///< seeds + growth instead of a plain flood fill
   double diagonal = 1.0;
+  /// Fine faces per face of this mesh (a working mesh's, working_mesh.h): on a noisy mesh the
+  /// smallest patch is kMinNoisyPatchFaces fine faces' worth of area, so a coarse mesh keeps
+  /// the narrow bands along rounded creases that the fine mesh keeps as patches of their own.
+  double face_scale = 1.0;
 };
 
 struct Region {
@@ -38,6 +42,14 @@ std::vector<Eigen::Vector3d> filter_normals(const MeshArrays& m, int iterations,
 /// Picks the simplest primitive whose fit is within tolerance (plane, sphere, cylinder, cone), or
 /// freeform. Exposed for tests.
 Fit choose_shape(const Samples& s, const SegmentParams& p);
+
+/// The regions of a working mesh's segmentation mapped onto `m` (working_mesh.h), refitted on m's
+/// own samples: a fitted region's shape refined on the samples within a few tolerances of it, a
+/// freeform one given the shape (simplest type first) that all but a tenth of its samples lie
+/// near and that fits those. A coarse face on a rounded crease covers a band the fine mesh would
+/// keep apart; its samples are left out of the fit rather than making the region freeform.
+void refit_regions(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals, const SegmentParams& p,
+                   Segmentation& seg);
 
 Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals,
                      const std::vector<VertexTensor>& tensors, const SegmentParams& p);

@@ -2,7 +2,8 @@
 // The working mesh of a large noisy mesh (issue 5: "remesh internally if needed, map results
 // back"). A noisy mesh costs the analysis about ten seconds per million vertices (filtered normals,
 // a vote several edges wide, the fit-driven split), while its primitives are as well resolved by
-// a tenth of its vertices: the analysis runs on a coarser copy and its patches are mapped back.
+// a tenth of its vertices (a smooth one's, a Poisson surface's, by a sixth): the analysis runs on
+// a coarser copy and its patches are mapped back.
 #include <vector>
 
 #include <Eigen/Core>
@@ -24,8 +25,10 @@ struct WorkingMesh {
 /// (cluster_vertices in the .cpp), each placed where the planes of its faces meet (Lindstrom's
 /// quadric; the mean where they do not pin it down), so creases stay sharp. A fine face on three
 /// clusters is a face of the working mesh, kept once; faces that collapse are dropped, and so are
-/// two faces on the same three clusters facing away from each other.
-WorkingMesh coarsen(const MeshArrays& fine, int target_vertices, double max_cell);
+/// two faces on the same three clusters facing away from each other. With `mean_flat` (a smooth
+/// mesh's), a cluster whose faces lie in one plane stays at the mean of its vertices (see
+/// place_clusters in the .cpp).
+WorkingMesh coarsen(const MeshArrays& fine, int target_vertices, double max_cell, bool mean_flat = false);
 
 /// The fine mesh's segmentation from the working mesh's: each face takes its coarse face's
 /// region, a collapsed face one of the regions around its clusters (the nearest fitted shape
