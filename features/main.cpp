@@ -54,10 +54,12 @@ int main(int argc, char** argv) {
                  "3 x the waviness, the surface's bumps a few edges wide; --report lists both)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--working-vertices", o.working_vertices,
-                 "A mesh noisier than 4% of its edge (a dense scan) with more than three times this many vertices is "
-                 "analysed on a coarser copy of about this many, and the patches are mapped back onto it: a million "
-                 "vertices in under 2 s instead of about 10; features narrower than two of the copy's cells are lost "
-                 "(0: always the whole mesh; --report lists the copy under working_mesh)")
+                 "A noisy mesh (not a clean CAD tessellation) with more than three times this many vertices is "
+                 "analysed on a coarser copy, and the patches are mapped back onto it: of about this many vertices "
+                 "when the noise is 4% of the edge or more (a dense scan), of a sixth of its vertices when smoother (an "
+                 "undecimated Poisson surface); a million vertices in about 2 s instead of 9-18; features narrower "
+                 "than two of the copy's cells are lost (0: always the whole mesh; --report lists the copy under "
+                 "working_mesh)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   app.add_option("--angle-tolerance", o.constraint.angle_tol_deg, "Constraint angle tolerance, degrees")
       ->check(CLI::Range(0.0, 10.0))->capture_default_str();

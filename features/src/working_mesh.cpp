@@ -68,24 +68,32 @@ std::vector<int> cluster_vertices(const MeshArrays& m, double cell, int& cluster
     candidates.push_back(best);
     i = j;
   }
-  // Seeds: candidates with no seed taken before them within 0.7 cell (a hash grid of that size).
+  // Seeds: candidates with no seed taken before them within 0.7 cell (a hash grid of that size:
+  // per cell its last seed, each seed linking to the one before it in its cell; lists in the map
+  // cost an allocation per cell, 0.14 s for the 160 k seeds of a smooth mesh's working mesh).
   const double spacing = 0.7 * cell;
-  std::unordered_map<std::uint64_t, std::vector<int>> taken;
-  std::vector<int> seeds;
+  std::unordered_map<std::uint64_t, int> last;  // cell → its last seed's index in `seeds`
+  last.reserve(candidates.size());
+  std::vector<int> seeds, before;  // before[i]: the seed taken before seeds[i] in its cell, or -1
   for (int v : candidates) {
     const Eigen::Vector3d q = (m.pos[v] - m.box.min) / spacing;
     const Eigen::Vector3i c(static_cast<int>(q.x()), static_cast<int>(q.y()), static_cast<int>(q.z()));
+    auto key = [&](int dx, int dy, int dz) {
+      return cell_key(Eigen::Vector3d(c.x() + dx + 1, c.y() + dy + 1, c.z() + dz + 1), {0, 0, 0}, 1.0);
+    };
     bool near = false;
     for (int dx = -1; dx <= 1 && !near; ++dx)
       for (int dy = -1; dy <= 1 && !near; ++dy)
         for (int dz = -1; dz <= 1 && !near; ++dz) {
-          const auto it = taken.find(cell_key(Eigen::Vector3d(c.x() + dx + 1, c.y() + dy + 1, c.z() + dz + 1), {0, 0, 0}, 1.0));
-          if (it == taken.end()) continue;
-          for (int s : it->second)
-            if ((m.pos[s] - m.pos[v]).squaredNorm() < spacing * spacing) near = true;
+          const auto it = last.find(key(dx, dy, dz));
+          if (it == last.end()) continue;
+          for (int i = it->second; i >= 0 && !near; i = before[i])
+            near = (m.pos[seeds[i]] - m.pos[v]).squaredNorm() < spacing * spacing;
         }
     if (near) continue;
-    taken[cell_key(Eigen::Vector3d(c.x() + 1, c.y() + 1, c.z() + 1), {0, 0, 0}, 1.0)].push_back(v);
+    const auto [it, fresh] = last.try_emplace(key(0, 0, 0), static_cast<int>(seeds.size()));
+    before.push_back(fresh ? -1 : it->second);
+    if (!fresh) it->second = static_cast<int>(seeds.size());
     seeds.push_back(v);
   }
   // Breadth-first from all seeds, level by level on all cores: a vertex first reached at level
