@@ -100,6 +100,31 @@ TEST(WorkingMesh, IsTheSameOnOneThreadAndOnTwo) {
   for (int v = 0; v < one.arrays.vertices(); ++v) ASSERT_EQ(one.arrays.pos[v], two.arrays.pos[v]) << "cluster " << v;
 }
 
+TEST(WorkingMesh, ASmoothMeshsAnalysisIsTheSameOnOneThreadAndOnTwo) {
+  // The refit of the mapped patches runs per patch in parallel: each on its own samples.
+  const Mesh m = noisy("pocket", 0.015, 200);
+  FeatureOptions o;
+  o.working_vertices = 20000;
+  auto on = [&](int threads) {
+    tbb::task_arena arena(threads);
+    Analysis a;
+    nlohmann::json report;
+    arena.execute([&] { a = analyze(m, o, &report); });
+    EXPECT_TRUE(report.contains("working_mesh"));
+    return a;
+  };
+  const Analysis one = on(1), two = on(2);
+  EXPECT_EQ(one.face_patch, two.face_patch);
+  ASSERT_EQ(one.features.patches.size(), two.features.patches.size());
+  for (std::size_t p = 0; p < one.features.patches.size(); ++p) {
+    EXPECT_EQ(one.features.patches[p].shape.type, two.features.patches[p].shape.type) << p;
+    EXPECT_EQ(one.features.patches[p].shape.point, two.features.patches[p].shape.point) << p;
+    EXPECT_EQ(one.features.patches[p].rms, two.features.patches[p].rms) << p;
+  }
+  EXPECT_EQ(one.features.lines.size(), two.features.lines.size());
+  EXPECT_EQ(one.features.groups.size(), two.features.groups.size());
+}
+
 TEST(WorkingMesh, FlatClustersOfASmoothMeshStayAtTheirMeans) {
   // Bumps three edges wide and 3 % of an edge high all over the plate, as a Poisson surface has:
   // each face's plane tilts, and quadric points amplify the tilt into the working mesh's noise.
