@@ -21,9 +21,10 @@ struct FeatureOptions {
   double radius = 0.0;            ///< voting radius, mm (0: 1 median edge length; noisy: 2, 3 from noise ≥ 4 % of it)
   double noise = -1.0;            ///< noise σ of the surface, mm (< 0: measured from the mesh)
   double fit_tolerance = 0.0;     ///< accept a shape when RMS ≤ this, mm (0: from noise and size)
-  /// A mesh whose noise is at least 4 % of its edge, with more than three times this many
-  /// vertices, is analysed on a coarser copy of about this many (clustered), and the patches are
-  /// mapped back onto it (docs/features.md, "Large noisy meshes"); 0: never.
+  /// A noisy mesh (not a clean tessellation) with more than three times this many vertices is
+  /// analysed on a coarser copy (clustered), and the patches are mapped back onto it: a copy of
+  /// about this many vertices when the noise is at least 4 % of the edge, of a sixth of the
+  /// vertices (at least this many) when smoother (docs/features.md, "Large meshes"); 0: never.
   int working_vertices = 60000;
   bool constraints = true;
   ConstraintOptions constraint;   ///< diagonal is filled from the mesh
