@@ -79,9 +79,6 @@ int working_target(int vertices, double relative_noise, int working_vertices) {
   return relative_noise >= kWideVoteNoise ? working_vertices : std::max(working_vertices, vertices / kSmoothReduction);
 }
 
-/// On noisy meshes, patches below this share of the surface area take no part in constraints.
-constexpr double kMinConstraintAreaShare = 0.002;
-
 /// Fit tolerance floor on noisy meshes, in median edge lengths, and in measured waviness (see
 /// analyze()).
 constexpr double kWavinessPerEdge = 0.1;
@@ -291,7 +288,7 @@ Analysis analyze_arrays(const MeshArrays& m, const FeatureOptions& o, nlohmann::
   if (noisy && co.min_patch_area <= 0) {
     double total = 0;
     for (const auto& p : f.patches) total += p.area;
-    co.min_patch_area = kMinConstraintAreaShare * total;
+    co.min_patch_area = kMinorAreaShare * total;
   }
   if (noisy && co.min_fixed_angle_deg <= 0) co.min_fixed_angle_deg = o.min_crease_deg;
   // The component groups beside the adjacency and the constraint search that reads it (0.05 s

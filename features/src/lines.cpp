@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include <tbb/parallel_for.h>
 
 #include "fit_util.h"
+#include "join_lines.h"
 
 namespace s2c::features {
 namespace {
@@ -18,7 +20,8 @@ Eigen::Vector3d oriented_normal(const Region& r, const Eigen::Vector3d& p, const
   return n.dot(face_normal) < 0 ? Eigen::Vector3d(-n) : n;
 }
 
-/// The intersection curve of the two patches' shapes, when it is a line or a circle.
+}  // namespace
+
 bool intersection_curve(const Shape& a, const Shape& b, const std::vector<Eigen::Vector3d>& pts, bool closed,
                         Shape& out) {
   const Shape* plane = a.type == ShapeType::plane ? &a : b.type == ShapeType::plane ? &b : nullptr;
@@ -55,8 +58,6 @@ bool intersection_curve(const Shape& a, const Shape& b, const std::vector<Eigen:
   fit::circle_or_arc(out, pts, closed, false);
   return true;
 }
-
-}  // namespace
 
 std::vector<TracedLine> trace_lines(const MeshArrays& m, const FaceNormal& normal, const Segmentation& seg,
                                     double min_crease_deg, double tolerance, bool noisy) {
@@ -158,7 +159,7 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const FaceNormal& norma
   // infinite when there is none). The chain lies within a band's width of the shape across it:
   // the others (a band along every rounded edge of a part touches them all) are passed over on
   // one distance.
-  auto across = [&](int shaped, int band, const Samples& s, bool closed) {
+  auto across = [&](int shaped, int band, const Samples& s, bool closed, int& best_other) {
     Fit best;
     best.rms = std::numeric_limits<double>::infinity();
     const Eigen::Vector3d& middle = s.points[s.points.size() / 2];
@@ -168,17 +169,18 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const FaceNormal& norma
           !intersection_curve(seg.regions[shaped].fit.shape, seg.regions[other].fit.shape, s.points, closed, c.shape))
         continue;
       fit::finish(c, s);
-      if (c.rms < best.rms) best = c;
+      if (c.rms < best.rms) best = c, best_other = other;
     }
     return best;
   };
-  for (auto& line : lines) {
+  auto fit_chain = [&](TracedLine& line) {
     Samples s;
     for (int v : line.vertices) s.points.push_back(m.pos[v]);
     const std::vector<Eigen::Vector3d>& pts = s.points;
     Fit& fit = line.fit;
-    fit.shape.type = ShapeType::freeform;
-    if (pts.size() < 2) continue;
+    fit = Fit{};
+    line.edge_a = line.edge_b = -1;
+    if (pts.size() < 2) return;
     Fit exact;
     if (line.region_b >= 0 &&
         intersection_curve(seg.regions[line.region_a].fit.shape, seg.regions[line.region_b].fit.shape, pts,
@@ -186,32 +188,89 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const FaceNormal& norma
       fit::finish(exact, s);
       if (exact.rms <= exact_tol) {
         fit = exact;
-        continue;
+        line.edge_a = line.region_a, line.edge_b = line.region_b;
+        return;
       }
     }
     if (noisy && line.region_b >= 0 && shapeless(line.region_a) != shapeless(line.region_b)) {
       const bool a_band = shapeless(line.region_a);
-      const Fit curve = across(a_band ? line.region_b : line.region_a, a_band ? line.region_a : line.region_b, s,
-                               line.closed);
+      const int shaped = a_band ? line.region_b : line.region_a;
+      int other = -1;
+      const Fit curve = across(shaped, a_band ? line.region_a : line.region_b, s, line.closed, other);
       if (curve.rms <= exact_tol) {
         fit = curve;
-        continue;
+        line.edge_a = std::min(shaped, other), line.edge_b = std::max(shaped, other);
+        return;
       }
     }
     if (!line.closed) {
       Fit l = fit_line(s);
       if (l.ok && l.rms <= line_tol) {
         fit = l;
-        continue;
+        return;
       }
     }
     if (pts.size() >= 4) {
       Fit c = fit_circle(s, line.closed);
       if (c.ok && c.rms <= line_tol) {
         fit = c;
-        continue;
+        return;
       }
     }
+  };
+  // On a noisy mesh a chain along a band may turn a corner without a junction (from a top edge
+  // down a side edge, one patch on either side all the way): a chain that fits no curve is split
+  // at its sharpest point, the vertex farthest from its chord, where its two sides turn by more
+  // than kCornerTurnDeg, and the sides are fitted on their own. The split stands when a side is
+  // an edge of two shapes: a freeform rim cut into straight pieces would be neither.
+  constexpr double kCornerTurnDeg = 30.0;
+  const double cos_turn = std::cos(kCornerTurnDeg * M_PI / 180.0);
+  auto split_at_corner = [&](TracedLine& line) -> std::optional<TracedLine> {
+    if (!noisy || line.closed || line.fit.shape.type != ShapeType::freeform || line.vertices.size() < 5) return {};
+    const std::vector<int>& vs = line.vertices;
+    const Eigen::Vector3d a = m.pos[vs.front()], b = m.pos[vs.back()];
+    const Eigen::Vector3d chord = (b - a).normalized();
+    std::size_t corner = 0;
+    double farthest = 0;
+    for (std::size_t k = 2; k + 2 < vs.size(); ++k) {
+      const Eigen::Vector3d w = m.pos[vs[k]] - a;
+      const double d = (w - chord * chord.dot(w)).norm();
+      if (d > farthest) farthest = d, corner = k;
+    }
+    if (corner == 0) return {};
+    const Eigen::Vector3d c = m.pos[vs[corner]];
+    if ((c - a).normalized().dot((b - c).normalized()) > cos_turn) return {};
+    TracedLine tail = line;
+    tail.vertices.assign(vs.begin() + static_cast<std::ptrdiff_t>(corner), vs.end());
+    line.vertices.resize(corner + 1);
+    return tail;
+  };
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    fit_chain(lines[i]);
+    while (true) {
+      TracedLine head = lines[i];
+      std::optional<TracedLine> tail = split_at_corner(head);
+      if (!tail) break;
+      fit_chain(head);
+      fit_chain(*tail);
+      if (head.edge_a < 0 && tail->edge_a < 0) break;
+      lines[i] = std::move(head);
+      lines.push_back(std::move(*tail));  // looked at again in its turn
+    }
+  }
+  if (noisy) {
+    // One CAD edge, traced in pieces along a band or crumbs, becomes one line (join_lines.h).
+    // Tracing misses a crease where its angle stays under min_crease_deg: the pieces of the
+    // fixture scans' straight edges lie up to 7 edges apart (the pocket: 0.2-2.2 mm at a 0.31
+    // mm median edge), and their ends stop short of the corners by as much.
+    const double reach = kMaxEdgeGap * m.median_edge;
+    double total = 0;
+    for (const auto& r : seg.regions) total += r.area;
+    const double min_area = kMinorAreaShare * total;
+    const RegionNeighbours neighbours(seg, lines);
+    identify_edges(m, seg, neighbours, min_area, exact_tol, lines);
+    join_edge_pieces(m, seg, min_area, reach, exact_tol, lines);
+    end_at_corners(m, seg, neighbours, min_area, reach, lines);
   }
   return lines;
 }

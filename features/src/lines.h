@@ -12,12 +12,30 @@
 
 namespace s2c::features {
 
+/// On a noisy mesh, patches under this share of the surface area are crumbs: they take no part in
+/// constraints, and a line along them is given the edge of the large patches around them.
+constexpr double kMinorAreaShare = 0.002;
+
+/// On a noisy mesh, pieces of one edge are joined across gaps of up to this many median edges
+/// where the mesh between them belongs to the edge's patches and crumbs, and a straight edge's end
+/// moves to a corner up to this far away (join_lines.h).
+constexpr double kMaxEdgeGap = 10.0;
+
 struct TracedLine {
   std::vector<int> vertices;
   bool closed = false;
   int region_a = -1, region_b = -1;  ///< the patches on either side (b = -1 on a mesh boundary)
+  /// The two shaped patches whose intersection the fit is (-1 when the fit is not one): region_a
+  /// and region_b, or, along a freeform band, the shaped side and the shape across the band.
+  int edge_a = -1, edge_b = -1;
   Fit fit;
 };
+
+/// The intersection curve of two shapes near the ordered points `pts` when it is a line (two
+/// planes, clipped to the points' extent) or a circle (a plane across a cylinder or cone axis;
+/// an arc when the points sweep less than a full turn and `closed` is false).
+bool intersection_curve(const Shape& a, const Shape& b, const std::vector<Eigen::Vector3d>& pts, bool closed,
+                        Shape& out);
 
 /// A face's normal as trace_lines reads it (the filtered one on a noisy mesh); asked only for the
 /// faces along patch borders, so a mapped-back normal need not be stored for every face.

@@ -919,6 +919,63 @@ TEST(ConstraintsTest, PlanesAcrossARoundedEdgeAreNeighboursOnNoisyMeshes) {
   EXPECT_FALSE(has(f, ConstraintKind::perpendicular, {side, far}));
 }
 
+TEST(ConstraintsTest, AScansEdgeAlongARoundedBandTakesPartAndItsLengthOnlyCornerToCorner) {
+  // The top edges of a 50 × 50 box whose scan rounded them into one freeform band. A line touching
+  // the band takes part when it is a whole edge: the intersection of two planes it touches, both
+  // ends on planes next to both (corners).
+  FeatureSet f;
+  auto patch = [&](ShapeType type, const Vector3d& point, const Vector3d& normal, double area) {
+    Patch p;
+    p.id = "P" + std::to_string(f.patches.size());
+    p.area = area;
+    p.shape = make_shape(type, point, normal);
+    f.patches.push_back(p);
+    return p.id;
+  };
+  auto line = [&](const Vector3d& from, const Vector3d& to, std::vector<std::string> touches) {
+    Line l;
+    l.id = "L" + std::to_string(f.lines.size());
+    l.shape = make_shape(ShapeType::line, from, to - from, 0, (to - from).norm());
+    l.vertices = {static_cast<int>(2 * f.lines.size()), static_cast<int>(2 * f.lines.size() + 1)};
+    for (const auto& p : touches) f.adjacency.emplace_back(p, l.id);
+    f.lines.push_back(l);
+    return l.id;
+  };
+  const std::string top = patch(ShapeType::plane, Vector3d(0, 0, 20), Vector3d::UnitZ(), 2500);
+  const std::string xp = patch(ShapeType::plane, Vector3d(25, 0, 10), Vector3d::UnitX(), 1000);
+  const std::string xn = patch(ShapeType::plane, Vector3d(-25, 0, 10), -Vector3d::UnitX(), 1000);
+  const std::string yp = patch(ShapeType::plane, Vector3d(0, 25, 10), Vector3d::UnitY(), 1000);
+  const std::string yn = patch(ShapeType::plane, Vector3d(0, -25, 10), -Vector3d::UnitY(), 1000);
+  const std::string band = patch(ShapeType::freeform, Vector3d::Zero(), Vector3d::UnitZ(), 300);
+  for (const auto& p : {top, xp, xn, yp, yn}) f.adjacency.emplace_back(p, band);
+  const std::string whole_xp = line({25, -25, 20}, {25, 25, 20}, {top, xp, band});
+  const std::string whole_xn = line({-25, 25, 20}, {-25, -25, 20}, {top, xn, band});
+  // A piece of the edge along yp, as long as the others but ending where no plane cuts it.
+  const std::string piece_yp = line({-20, 25, 20}, {30, 25, 20}, {top, yp, band});
+  // A line along the band that is no intersection: 1 mm off the edge along yn.
+  const std::string off_yn = line({-25, -24, 20}, {25, -24, 20}, {top, yn, band});
+  ConstraintOptions o;
+  o.diagonal = 100;
+  o.min_patch_area = 10.0;
+  detect_constraints(f, o);
+  EXPECT_TRUE(has(f, ConstraintKind::equal_length, {whole_xp, whole_xn}));
+  for (const Group* g : constraints(f))
+    for (const auto& m : g->members) {
+      EXPECT_NE(m, off_yn) << "in " << g->id;
+      EXPECT_NE(m, piece_yp) << "in " << g->id;
+    }
+  // Without the band all of them take part, as before: the piece's equal length is stated.
+  FeatureSet unbanded = f;
+  unbanded.groups.clear();
+  auto& adjacency = unbanded.adjacency;
+  adjacency.erase(std::remove_if(adjacency.begin(), adjacency.end(),
+                                 [&](const auto& a) { return a.first == band || a.second == band; }),
+                  adjacency.end());
+  unbanded.patches.pop_back();
+  detect_constraints(unbanded, o);
+  EXPECT_TRUE(grouped(unbanded, ConstraintKind::equal_length, {whole_xp, whole_xn, piece_yp}));
+}
+
 TEST(ConstraintsTest, EmptySetGivesNothing) {
   FeatureSet f;
   EXPECT_EQ(detect_constraints(f, {}), 0);

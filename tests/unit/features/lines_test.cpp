@@ -99,5 +99,58 @@ TEST(FeatureLines, TheShapeAcrossTheBandMustMeetThePlaneNearTheChain) {
   EXPECT_NEAR(line.fit.shape.radius, kBand, 1e-6);
 }
 
+TEST(FeatureLines, ANoisyChainThatTurnsACornerIsSplitThereAndEachSideFitted) {
+  // A flat 20 × 20 grid whose quadrant x > 10, y > 10 is another patch: the border between the two
+  // runs along y = 10, then turns 90° up x = 10, one pair of patches all the way (no junction). The
+  // patches' shapes stand square to each other, so the border is a crease. Only its x = 10 half is
+  // their intersection (the plane x = 10).
+  constexpr int kCells = 20;
+  TriangleSoup soup;
+  for (int j = 0; j <= kCells; ++j)
+    for (int i = 0; i <= kCells; ++i) soup.vertices.emplace_back(i, j, 0);
+  for (int j = 0; j < kCells; ++j)
+    for (int i = 0; i < kCells; ++i) {
+      const int a = j * (kCells + 1) + i, b = a + 1, c = b + kCells + 1, d = a + kCells + 1;
+      soup.faces.push_back({a, b, c});
+      soup.faces.push_back({a, c, d});
+    }
+  const MeshArrays m = build_arrays(std::move(soup));
+  Segmentation seg;
+  seg.regions.resize(2);
+  seg.face_region.resize(m.faces());
+  for (int f = 0; f < m.faces(); ++f) {
+    const Eigen::Vector3d c = m.centroid(f);
+    const int r = c.x() > 10 && c.y() > 10 ? 1 : 0;
+    seg.face_region[f] = r;
+    seg.regions[r].faces.push_back(f);
+    seg.regions[r].area += m.farea[f];
+  }
+  seg.regions[0].fit.shape.type = seg.regions[1].fit.shape.type = ShapeType::plane;
+  seg.regions[0].fit.shape.dir = Eigen::Vector3d::UnitZ();
+  seg.regions[1].fit.shape.point = Eigen::Vector3d(10, 0, 0);
+  seg.regions[1].fit.shape.dir = Eigen::Vector3d::UnitX();
+  auto between = [](const std::vector<TracedLine>& lines) {
+    std::vector<TracedLine> out;
+    for (const auto& l : lines)
+      if (l.region_a == 0 && l.region_b == 1) out.push_back(l);
+    return out;
+  };
+  const std::vector<TracedLine> clean = between(trace_lines(m, m.fnormal, seg, 25.0, 0.05, false));
+  ASSERT_EQ(clean.size(), 1u);
+  EXPECT_EQ(clean[0].fit.shape.type, ShapeType::freeform);
+  const std::vector<TracedLine> noisy = between(trace_lines(m, m.fnormal, seg, 25.0, 0.05, true));
+  ASSERT_EQ(noisy.size(), 2u);
+  for (const auto& l : noisy) {
+    ASSERT_EQ(l.fit.shape.type, ShapeType::line);
+    EXPECT_NEAR(l.fit.shape.length, 10.0, 1e-9);
+    EXPECT_LT(l.fit.rms, 1e-9);
+  }
+  const bool first_up = std::abs(noisy[0].fit.shape.dir.y()) > 0.5;
+  const TracedLine& up = noisy[first_up ? 0 : 1];
+  EXPECT_EQ(up.edge_a, 0) << "x = 10 is the two planes' intersection";
+  EXPECT_EQ(up.edge_b, 1);
+  EXPECT_EQ(noisy[first_up ? 1 : 0].edge_a, -1) << "y = 10 is not";
+}
+
 }  // namespace
 }  // namespace s2c::features
