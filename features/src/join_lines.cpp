@@ -173,7 +173,10 @@ void join_edge_pieces(const MeshArrays& m, const Segmentation& seg, double min_a
       pieces[{line.edge_a, line.edge_b}].push_back(l);
   }
   std::vector<char> gone(lines.size(), 0);
-  for (const auto& [edge, ids] : pieces) {
+  for (const auto& entry : pieces) {
+    // (Not a structured binding: the bridge below captures it, which C++17 does not allow.)
+    const std::pair<int, int>& edge = entry.first;
+    const std::vector<int>& ids = entry.second;
     if (ids.size() < 2) continue;
     const Shape& first = lines[ids.front()].fit.shape;
     const Along along(first);
