@@ -205,6 +205,7 @@ class Detector {
     nbr_.resize(n);
     std::unordered_map<std::string, int> index;
     doubtful_.assign(np_, 0);  // patches whose lines take no part either
+    doubtful_of_.resize(np_);
     for (int i = 0; i < np_; ++i) {
       shape_[i] = usable(f.patches[i].shape);
       if (shape_[i] && !is_surface(shape_[i]->type)) shape_[i].reset();
@@ -233,31 +234,30 @@ class Detector {
       nbr_[a].push_back(b);
       nbr_[b].push_back(a);
     }
-    // A line touching such a patch is as doubtful as the patch, unless it is the intersection of
-    // two patches it touches that take part: a CAD edge, which a scan rounds into a band or crumbs.
+    // A line touching such a patch is as doubtful as the patch, unless it is a whole edge of two
+    // large patches it touches: a straight line from corner to corner, a closed circle, a CAD
+    // edge, which a scan rounds into a band or crumbs. A piece (the edge traced with gaps too wide
+    // to bridge, a corner's crumb) would state its own length and ends.
     std::vector<int> doubtful_lines;
     for (auto [a, b] : adjacent_)
       if (a < np_ && b >= np_ && doubtful_[a]) doubtful_lines.push_back(b);
-    // Patches that touch, or touch one doubtful patch (a scan's rounded edge between them).
-    for (auto [a, b] : adjacent_)
-      if (b < np_) near_.emplace(a, b);
-    for (int c = 0; c < np_; ++c)
-      if (doubtful_[c])
-        for (std::size_t i = 0; i < nbr_[c].size(); ++i)
-          for (std::size_t j = i + 1; j < nbr_[c].size(); ++j)
-            if (nbr_[c][i] < np_ && nbr_[c][j] < np_)
-              near_.emplace(std::min(nbr_[c][i], nbr_[c][j]), std::max(nbr_[c][i], nbr_[c][j]));
-    // Such a line takes part when it is a whole edge of two large patches: a straight line from
-    // corner to corner, a closed circle. A piece (the edge traced with gaps too wide to bridge, a
-    // corner's crumb) would state its own length and ends.
+    std::sort(doubtful_lines.begin(), doubtful_lines.end());
+    doubtful_lines.erase(std::unique(doubtful_lines.begin(), doubtful_lines.end()), doubtful_lines.end());
+    const double large_area = kEdgeFaceArea * o.min_patch_area;
+    for (int i = 0; i < np_; ++i)
+      if (shape_[i] && area_[i] >= large_area) {
+        if (type(i) == ShapeType::plane) large_planes_.push_back(i);
+        for (int k : nbr_[i])
+          if (k < np_ && doubtful_[k]) doubtful_of_[i].push_back(k);
+        std::sort(doubtful_of_[i].begin(), doubtful_of_[i].end());
+      }
     for (int l : doubtful_lines) {
       std::pair<int, int> edge;
       if (!shape_[l]) continue;
-      const bool whole = type(l) == ShapeType::line ? edge_of_two(l, edge) && ends_at_corners(l, edge)
-                                                    : type(l) == ShapeType::circle && edge_of_two(l, edge);
-      if (!whole || area_[edge.first] < kEdgeFaceArea * o.min_patch_area ||
-          area_[edge.second] < kEdgeFaceArea * o.min_patch_area)
-        shape_[l].reset();
+      const bool whole = edge_of_two(l, edge) && area_[edge.first] >= large_area &&
+                         area_[edge.second] >= large_area &&
+                         (type(l) == ShapeType::line ? ends_at_corners(l, edge) : type(l) == ShapeType::circle);
+      if (!whole) shape_[l].reset();
     }
   }
 
@@ -344,16 +344,27 @@ class Detector {
     return false;
   }
 
-  /// Whether both ends of straight line l, the edge of planes `edge`, lie on a plane that cuts it
-  /// and is a neighbour of both (a corner).
+  /// Whether large patches a and b touch, or touch one doubtful patch (a scan's rounded edge
+  /// between them).
+  bool near(int a, int b) const {
+    if (std::find(nbr_[a].begin(), nbr_[a].end(), b) != nbr_[a].end()) return true;
+    const std::vector<int>&x = doubtful_of_[a], &y = doubtful_of_[b];
+    for (std::size_t i = 0, j = 0; i < x.size() && j < y.size();) {
+      if (x[i] == y[j]) return true;
+      x[i] < y[j] ? ++i : ++j;
+    }
+    return false;
+  }
+
+  /// Whether both ends of straight line l, the edge of large planes `edge`, lie on a large plane
+  /// that cuts it and is near both (a corner).
   bool ends_at_corners(int l, std::pair<int, int> edge) const {
     const Shape& c = s(l);
     constexpr double kMinCrossing = 0.5;  // a plane nearly along the line does not end it
     bool start = false, end = false;
-    for (int p = 0; p < np_; ++p) {
-      if (type(p) != ShapeType::plane || p == edge.first || p == edge.second || std::abs(s(p).dir.dot(c.dir)) < kMinCrossing ||
-          !near_.count({std::min(p, edge.first), std::max(p, edge.first)}) ||
-          !near_.count({std::min(p, edge.second), std::max(p, edge.second)}))
+    for (int p : large_planes_) {
+      if (p == edge.first || p == edge.second || std::abs(s(p).dir.dot(c.dir)) < kMinCrossing ||
+          !near(p, edge.first) || !near(p, edge.second))
         continue;
       start = start || std::abs(s(p).dir.dot(c.point - s(p).point)) <= len_tol_;
       end = end || std::abs(s(p).dir.dot(line_end(l) - s(p).point)) <= len_tol_;
@@ -803,7 +814,8 @@ class Detector {
   std::vector<std::pair<int, int>> adjacent_;  ///< unique (a < b)
   std::vector<std::pair<int, int>> connected_;  ///< curves sharing an end vertex (a < b)
   std::vector<int> planes_, axes_, spheres_, radial_, straight_, circles_;
-  std::set<std::pair<int, int>> near_;  ///< patch pairs (smaller first) that touch or share a doubtful patch
+  std::vector<int> large_planes_;                ///< usable planes of kEdgeFaceArea × min_patch_area or more
+  std::vector<std::vector<int>> doubtful_of_;    ///< per large patch: its doubtful neighbours, sorted
   std::vector<std::vector<int>> plane_classes_;
   std::map<int, int> plane_class_;
   std::vector<Found> found_;

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <functional>
+#include <limits>
 #include <map>
 
 #include <Eigen/Geometry>
@@ -18,6 +18,11 @@ namespace {
 using Eigen::Vector3d;
 
 bool shaped(const Segmentation& seg, int r) { return r >= 0 && seg.regions[r].fit.shape.type != ShapeType::freeform; }
+
+/// A large shaped patch: one whose edges are CAD edges, not a crumb's or a band's.
+bool large(const Segmentation& seg, int r, double min_area) {
+  return shaped(seg, r) && seg.regions[r].area >= min_area;
+}
 
 /// Where a point lies along an edge: the distance along a line from its point, the angle about a
 /// circle's normal.
@@ -72,6 +77,8 @@ using Bridge = std::function<bool(double length, int from, int to)>;
 /// when one run goes all the way round.
 std::vector<std::vector<Span>> runs_of(std::vector<Span> spans, double scale, bool circular, const Bridge& bridge,
                                        bool& full) {
+  full = false;
+  if (spans.empty()) return {};
   std::sort(spans.begin(), spans.end(), [](const Span& a, const Span& b) { return a.lo < b.lo; });
   std::vector<std::vector<Span>> runs;
   double reach = 0;
@@ -129,15 +136,16 @@ bool RegionNeighbours::adjacent(int a, int b) const {
 
 void identify_edges(const MeshArrays& m, const Segmentation& seg, const RegionNeighbours& neighbours, double min_area,
                     double tolerance, std::vector<TracedLine>& lines) {
-  auto major = [&](int r) { return shaped(seg, r) && seg.regions[r].area >= min_area; };
   std::vector<int> candidates;
   for (TracedLine& line : lines) {
-    if (line.region_b < 0 || line.vertices.size() < 2 || (major(line.edge_a) && major(line.edge_b))) continue;
+    if (line.region_b < 0 || line.vertices.size() < 2 ||
+        (large(seg, line.edge_a, min_area) && large(seg, line.edge_b, min_area)))
+      continue;
     candidates.clear();
     for (int r : {line.region_a, line.region_b}) {
-      if (major(r)) candidates.push_back(r);
+      if (large(seg, r, min_area)) candidates.push_back(r);
       for (int n : neighbours.of(r))
-        if (major(n)) candidates.push_back(n);
+        if (large(seg, n, min_area)) candidates.push_back(n);
     }
     std::sort(candidates.begin(), candidates.end());
     candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
@@ -164,7 +172,6 @@ void identify_edges(const MeshArrays& m, const Segmentation& seg, const RegionNe
 
 void join_edge_pieces(const MeshArrays& m, const Segmentation& seg, double min_area, double max_gap, double tolerance,
                       std::vector<TracedLine>& lines) {
-  auto major = [&](int r) { return shaped(seg, r) && seg.regions[r].area >= min_area; };
   std::map<std::pair<int, int>, std::vector<int>> pieces;  // edge → its open pieces
   for (int l = 0; l < static_cast<int>(lines.size()); ++l) {
     const TracedLine& line = lines[l];
@@ -199,7 +206,7 @@ void join_edge_pieces(const MeshArrays& m, const Segmentation& seg, double min_a
         int next = -1;
         for (int k = m.vf_start[v]; k < m.vf_start[v + 1]; ++k) {
           const int f = m.vf[k], r = seg.face_region[f];
-          if (r != edge.first && r != edge.second && major(r)) return false;
+          if (r != edge.first && r != edge.second && large(seg, r, min_area)) return false;
           for (int u : m.tri[f])
             if (const double du = (m.pos[u] - target).norm(); du < d) d = du, next = u;
         }
@@ -287,7 +294,7 @@ void end_at_corners(const MeshArrays& m, const Segmentation& seg, const RegionNe
     double lo = 0, hi = s.length, best_lo = reach, best_hi = reach;
     for (int c : neighbours.of(line.edge_a)) {
       const Shape& p = seg.regions[c].fit.shape;
-      if (c == line.edge_b || p.type != ShapeType::plane || seg.regions[c].area < min_area ||
+      if (c == line.edge_b || p.type != ShapeType::plane || !large(seg, c, min_area) ||
           !neighbours.adjacent(c, line.edge_b))
         continue;
       const double crossing = p.dir.dot(s.dir);
