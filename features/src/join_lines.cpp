@@ -141,16 +141,20 @@ void identify_edges(const MeshArrays& m, const Segmentation& seg, const RegionNe
     if (line.region_b < 0 || line.vertices.size() < 2 ||
         (large(seg, line.edge_a, min_area) && large(seg, line.edge_b, min_area)))
       continue;
+    Samples s;
+    for (int v : line.vertices) s.points.push_back(m.pos[v]);
+    // Only shapes that pass near the piece can meet along it (a band along every rounded edge of
+    // a part has them all as neighbours): the pairs stay few.
+    const Vector3d& middle = s.points[s.points.size() / 2];
     candidates.clear();
     for (int r : {line.region_a, line.region_b}) {
       if (large(seg, r, min_area)) candidates.push_back(r);
       for (int n : neighbours.of(r))
-        if (large(seg, n, min_area)) candidates.push_back(n);
+        if (large(seg, n, min_area) && distance(seg.regions[n].fit.shape, middle) <= 2 * tolerance)
+          candidates.push_back(n);
     }
     std::sort(candidates.begin(), candidates.end());
     candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
-    Samples s;
-    for (int v : line.vertices) s.points.push_back(m.pos[v]);
     Fit best;
     best.rms = tolerance;
     int best_a = -1, best_b = -1;
