@@ -62,7 +62,8 @@ Shape plane(const Vector3d& point, const Vector3d& normal) {
 }
 
 /// Top, band (freeform), side and cap; `region_of` may move faces to other regions.
-Segmentation segmentation(const MeshArrays& m, const Strip& s, int regions, int (*region_of)(int face, int strip, double x)) {
+Segmentation segmentation(const MeshArrays& m, const Strip& s, int regions,
+                          int (*region_of)(int face, int strip, double x)) {
   Segmentation seg;
   seg.regions.resize(regions);
   seg.face_region.resize(m.faces());
