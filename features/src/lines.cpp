@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <optional>
 
 #include <tbb/parallel_for.h>
 
@@ -139,22 +138,11 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const FaceNormal& norma
   const double exact_tol = noisy ? 2 * line_tol : line_tol;
   // On a noisy mesh a rounded edge no seed's shape grew over stays a freeform band between the two
   // faces it joins, and a chain along the band meets one of them only: the edge it follows is that
-  // face's intersection with a shape on the band's far side. The shaped neighbours of each
-  // freeform region, from the line edges.
+  // face's intersection with a shape on the band's far side, one of the band's neighbours. (The
+  // chains' pairs of patches are the line edges' pairs, so the neighbours are known now; the
+  // splits below add no pair.)
   auto shapeless = [&](int r) { return seg.regions[r].fit.shape.type == ShapeType::freeform; };
-  std::vector<std::vector<int>> across_band(seg.regions.size());
-  if (noisy) {
-    for (int e : line_edges) {
-      const auto [a, b] = pair[e];
-      if (a < 0 || shapeless(a) == shapeless(b)) continue;
-      const int band = shapeless(a) ? a : b;
-      across_band[band].push_back(a + b - band);
-    }
-    for (auto& n : across_band) {
-      std::sort(n.begin(), n.end());
-      n.erase(std::unique(n.begin(), n.end()), n.end());
-    }
-  }
+  const RegionNeighbours neighbours(seg, lines);
   // The nearest such curve to a chain between shaped patch `shaped` and band `band` (rms
   // infinite when there is none). The chain lies within a band's width of the shape across it:
   // the others (a band along every rounded edge of a part touches them all) are passed over on
@@ -163,7 +151,7 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const FaceNormal& norma
     Fit best;
     best.rms = std::numeric_limits<double>::infinity();
     const Eigen::Vector3d& middle = s.points[s.points.size() / 2];
-    for (int other : across_band[band]) {
+    for (int other : neighbours.of(band)) {
       Fit c;
       if (other == shaped || !(distance(seg.regions[other].fit.shape, middle) <= 4 * exact_tol) ||
           !intersection_curve(seg.regions[shaped].fit.shape, seg.regions[other].fit.shape, s.points, closed, c.shape))
@@ -225,8 +213,9 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const FaceNormal& norma
   // an edge of two shapes: a freeform rim cut into straight pieces would be neither.
   constexpr double kCornerTurnDeg = 30.0;
   const double cos_turn = std::cos(kCornerTurnDeg * M_PI / 180.0);
-  auto split_at_corner = [&](TracedLine& line) -> std::optional<TracedLine> {
-    if (!noisy || line.closed || line.fit.shape.type != ShapeType::freeform || line.vertices.size() < 5) return {};
+  // The vertex to split `line` at, or 0 for none.
+  auto corner_of = [&](const TracedLine& line) -> std::size_t {
+    if (!noisy || line.closed || line.fit.shape.type != ShapeType::freeform || line.vertices.size() < 5) return 0;
     const std::vector<int>& vs = line.vertices;
     const Eigen::Vector3d a = m.pos[vs.front()], b = m.pos[vs.back()];
     const Eigen::Vector3d chord = (b - a).normalized();
@@ -237,25 +226,21 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const FaceNormal& norma
       const double d = (w - chord * chord.dot(w)).norm();
       if (d > farthest) farthest = d, corner = k;
     }
-    if (corner == 0) return {};
+    if (corner == 0) return 0;
     const Eigen::Vector3d c = m.pos[vs[corner]];
-    if ((c - a).normalized().dot((b - c).normalized()) > cos_turn) return {};
-    TracedLine tail = line;
-    tail.vertices.assign(vs.begin() + static_cast<std::ptrdiff_t>(corner), vs.end());
-    line.vertices.resize(corner + 1);
-    return tail;
+    return (c - a).normalized().dot((b - c).normalized()) > cos_turn ? 0 : corner;
   };
   for (std::size_t i = 0; i < lines.size(); ++i) {
     fit_chain(lines[i]);
-    while (true) {
-      TracedLine head = lines[i];
-      std::optional<TracedLine> tail = split_at_corner(head);
-      if (!tail) break;
+    while (const std::size_t corner = corner_of(lines[i])) {
+      TracedLine head = lines[i], tail = lines[i];
+      head.vertices.resize(corner + 1);
+      tail.vertices.erase(tail.vertices.begin(), tail.vertices.begin() + static_cast<std::ptrdiff_t>(corner));
       fit_chain(head);
-      fit_chain(*tail);
-      if (head.edge_a < 0 && tail->edge_a < 0) break;
+      fit_chain(tail);
+      if (head.edge_a < 0 && tail.edge_a < 0) break;
       lines[i] = std::move(head);
-      lines.push_back(std::move(*tail));  // looked at again in its turn
+      lines.push_back(std::move(tail));  // looked at again in its turn
     }
   }
   if (noisy) {
@@ -267,7 +252,6 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const FaceNormal& norma
     double total = 0;
     for (const auto& r : seg.regions) total += r.area;
     const double min_area = kMinorAreaShare * total;
-    const RegionNeighbours neighbours(seg, lines);
     identify_edges(m, seg, neighbours, min_area, exact_tol, lines);
     join_edge_pieces(m, seg, min_area, reach, exact_tol, lines);
     end_at_corners(m, seg, neighbours, min_area, reach, lines);
