@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 
 #include "fit_util.h"
+#include "kth_value.h"
 #include "s2c/core/errors.h"
 
 namespace s2c::features {
@@ -94,8 +95,7 @@ void add_sizes(MeshArrays& m) {
     double sum = 0;
     for (double l : lengths) sum += l;
     m.mean_edge = sum / lengths.size();
-    std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
-    m.median_edge = lengths[lengths.size() / 2];
+    m.median_edge = kth_value(lengths, lengths.size() / 2);
   }
   for (int v = 0; v < m.vertices(); ++v) {
     if (v == 0) m.box.min = m.box.max = m.pos[0];
@@ -111,6 +111,8 @@ int corner_of(const MeshArrays& m, int f, int v) {
 }
 
 constexpr int kNoFace = -1, kBadEdge = -2;
+/// A side not looked up yet (add_manifold_edges).
+constexpr int kUnlooked = -3;
 
 /// The face across side i (t[i] → t[i+1]) of face f, found through the faces of t[i]: kNoFace on
 /// a boundary, kBadEdge where the side is not a manifold edge with the faces oriented alike (a
@@ -215,15 +217,32 @@ bool add_manifold_edges(MeshArrays& m) {
     for (int k = 0; k < 3; ++k)
       if (t[k] == t[(k + 1) % 3]) return false;
   add_faces(m);
-  // The side (f, i) starts a new edge unless the face across it comes earlier.
-  std::vector<std::array<int, 3>> across(nf);
-  std::vector<int> first_edge(nf + 1, 0);
+  // The faces across the sides. Each side a → b with a < b is looked up and, when it finds a
+  // face g across, sets g's side b → a too: that is the one face whose lookup would find f (any
+  // other face on the edge makes f's lookup a bad edge), and only f's lookup writes it. The
+  // sides left over (a boundary, or b → a with no a → b) are looked up after. Half the lookups:
+  // they were half the arrays' time on a million faces.
+  std::vector<std::array<int, 3>> across(nf, {kUnlooked, kUnlooked, kUnlooked});
   std::atomic<bool> manifold{true};
+  tbb::parallel_for(0, nf, [&](int f) {
+    for (int i = 0; i < 3; ++i) {
+      const int a = m.tri[f][i], b = m.tri[f][(i + 1) % 3];
+      if (a > b) continue;
+      const int g = face_across_side(m, f, i);
+      across[f][i] = g;
+      if (g == kBadEdge) manifold = false;
+      if (g >= 0) across[g][corner_of(m, g, b)] = f;
+    }
+  });
+  if (!manifold) return false;
+  std::vector<int> first_edge(nf + 1, 0);
   tbb::parallel_for(0, nf, [&](int f) {
     int fresh = 0;
     for (int i = 0; i < 3; ++i) {
-      across[f][i] = face_across_side(m, f, i);
-      if (across[f][i] == kBadEdge) manifold = false;
+      if (m.tri[f][i] > m.tri[f][(i + 1) % 3] && across[f][i] == kUnlooked) {
+        across[f][i] = face_across_side(m, f, i);
+        if (across[f][i] == kBadEdge) manifold = false;
+      }
       fresh += !(across[f][i] >= 0 && across[f][i] < f);
     }
     first_edge[f + 1] = fresh;
@@ -305,8 +324,7 @@ double measure_noise(const MeshArrays& m) {
   });
   offsets.erase(std::remove(offsets.begin(), offsets.end(), -1.0), offsets.end());
   if (offsets.empty()) return 0.0;
-  std::nth_element(offsets.begin(), offsets.begin() + offsets.size() / 4, offsets.end());
-  return offsets[offsets.size() / 4] / 0.3186 / 2.0;
+  return kth_value(offsets, offsets.size() / 4) / 0.3186 / 2.0;
 }
 
 double measure_waviness(const MeshArrays& m) {

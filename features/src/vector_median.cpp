@@ -47,16 +47,19 @@ int RingColumns::median_sse2() {
   return first_least(cost_.data(), k);
 }
 
-// Rows padded to a multiple of four with zero normals, the whole matrix computed (|n_j − n_i| is
-// |n_i − n_j| to the bit): row j holds the distances of all i, so four costs sum side by side,
-// each over j in order.
+// Rows padded to a multiple of four with zero normals: row j holds the distances of all i, so
+// four costs sum side by side, each over j in order. Row j computes the blocks of four from its
+// own on; the blocks before it are copied from the rows they hold (|n_j − n_i| is |n_i − n_j| to
+// the bit): 37 square roots of four instead of 52 for a ring of 13.
 S2C_AVX int RingColumns::median_avx() {
   const int k = k_, kp = (k + 3) & ~3;
   x_.resize(kp, 0.0), y_.resize(kp, 0.0), z_.resize(kp, 0.0);
   apart_.resize(static_cast<std::size_t>(kp) * kp);
   for (int j = 0; j < k; ++j) {
     const __m256d xj = _mm256_set1_pd(x_[j]), yj = _mm256_set1_pd(y_[j]), zj = _mm256_set1_pd(z_[j]);
-    for (int i = 0; i < kp; i += 4) {
+    for (int i = 0; i < (j & ~3); ++i)
+      apart_[static_cast<std::size_t>(j) * kp + i] = apart_[static_cast<std::size_t>(i) * kp + j];
+    for (int i = j & ~3; i < kp; i += 4) {
       const __m256d dx = _mm256_sub_pd(_mm256_loadu_pd(&x_[i]), xj);
       const __m256d dy = _mm256_sub_pd(_mm256_loadu_pd(&y_[i]), yj);
       const __m256d dz = _mm256_sub_pd(_mm256_loadu_pd(&z_[i]), zj);
@@ -65,16 +68,25 @@ S2C_AVX int RingColumns::median_avx() {
     }
     apart_[static_cast<std::size_t>(j) * kp + j] = 0.0;  // (as on SSE2, even for a normal that is not finite)
   }
+  // Up to four blocks' sums at once: each is a chain of dependent additions, and side by side
+  // they overlap.
   double cost[4];
   int best = -1;
   double least = std::numeric_limits<double>::infinity();
-  for (int i = 0; i < k; i += 4) {
-    __m256d c = _mm256_setzero_pd();
-    for (int j = 0; j < k; ++j)
-      c = _mm256_add_pd(c, _mm256_mul_pd(_mm256_set1_pd(a_[j]), _mm256_loadu_pd(&apart_[static_cast<std::size_t>(j) * kp + i])));
-    _mm256_storeu_pd(cost, c);
-    const int here = first_least(cost, std::min(4, k - i));
-    if (here >= 0 && cost[here] < least) least = cost[here], best = i + here;
+  for (int i0 = 0; i0 < k; i0 += 16) {
+    const int blocks = std::min(4, (kp - i0) / 4);
+    __m256d c[4] = {_mm256_setzero_pd(), _mm256_setzero_pd(), _mm256_setzero_pd(), _mm256_setzero_pd()};
+    for (int j = 0; j < k; ++j) {
+      const __m256d aj = _mm256_set1_pd(a_[j]);
+      const double* row = &apart_[static_cast<std::size_t>(j) * kp + i0];
+      for (int b = 0; b < blocks; ++b) c[b] = _mm256_add_pd(c[b], _mm256_mul_pd(aj, _mm256_loadu_pd(row + 4 * b)));
+    }
+    for (int b = 0; b < blocks; ++b) {
+      const int i = i0 + 4 * b;
+      _mm256_storeu_pd(cost, c[b]);
+      const int here = first_least(cost, std::min(4, k - i));
+      if (here >= 0 && cost[here] < least) least = cost[here], best = i + here;
+    }
   }
   x_.resize(k), y_.resize(k), z_.resize(k);
   return best;

@@ -30,6 +30,12 @@ struct WorkingMesh {
 /// place_clusters in the .cpp).
 WorkingMesh coarsen(const MeshArrays& fine, int target_vertices, double max_cell, bool mean_flat = false);
 
+/// The candidates (indices into `pos`), in order, that have no seed taken before them closer
+/// than `spacing`: the seeds of coarsen's clusters (exposed for tests). `origin` is a corner
+/// below the points.
+std::vector<int> spaced_seeds(const std::vector<Eigen::Vector3d>& pos, const Eigen::Vector3d& origin,
+                              const std::vector<int>& candidates, double spacing);
+
 /// The fine mesh's segmentation from the working mesh's: each face takes its coarse face's
 /// region, a collapsed face one of the regions around its clusters (the nearest fitted shape
 /// within 3 `tolerance`s, else the most common); then the faces along a border between two fitted

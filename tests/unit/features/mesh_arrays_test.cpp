@@ -69,6 +69,12 @@ TEST(MeshArraysFromFaces, NonManifoldListsGoThroughOpenMesh) {
   std::swap(bad.back().faces[5][0], bad.back().faces[5][1]);
   bad.push_back(sheet);  // the same face twice
   bad.back().faces.push_back(sheet.faces[3]);
+  // Two faces running one edge the same way, from the larger vertex to the smaller, and no face
+  // the other way (the one kind of side add_manifold_edges looks up only after the others).
+  TriangleSoup same_way;
+  same_way.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0.5}};
+  same_way.faces = {{2, 1, 0}, {2, 1, 3}};
+  bad.push_back(same_way);
   // Two tetrahedra sharing one vertex: two closed fans around it.
   TriangleSoup bowtie;
   bowtie.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}};

@@ -1,5 +1,9 @@
 // The working mesh of a large noisy mesh (features/src/working_mesh.h): the clustered copy is a
 // closed manifold near the part's surface, and the analysis on it finds what the full mesh gives.
+#include <algorithm>
+#include <numeric>
+#include <random>
+
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
@@ -29,6 +33,41 @@ Mesh noisy(const std::string& part, double sigma_per_edge, double div = 100) {
   Mesh m = bench::refine_mesh(clean, bounds(clean).diagonal() / div);
   bench::add_noise(m, sigma_per_edge * bench::mean_edge_length(m), 1);
   return m;
+}
+
+/// The seeds as their definition reads: each candidate in turn, unless a seed taken before it
+/// lies closer than the spacing (every pair compared).
+std::vector<int> seeds_by_definition(const std::vector<Eigen::Vector3d>& pos, const std::vector<int>& candidates,
+                                     double spacing) {
+  std::vector<int> seeds;
+  for (int c : candidates) {
+    bool close = false;
+    for (int s : seeds) close = close || (pos[s] - pos[c]).squaredNorm() < spacing * spacing;
+    if (!close) seeds.push_back(c);
+  }
+  return seeds;
+}
+
+TEST(WorkingMesh, SeedsAreTheCandidatesWithNoEarlierSeedWithinTheSpacing) {
+  // Points scattered in a box, and points on a lattice of half spacings, whose pairs lie exactly
+  // on the cells' borders and exactly the spacing apart (not closer: both kept).
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 3.0);
+  std::vector<Eigen::Vector3d> pos;
+  for (int i = 0; i < 3000; ++i) pos.emplace_back(u(rng), u(rng), 0.3 * u(rng));
+  const double spacing = 0.2;
+  for (int i = 0; i < 12; ++i)
+    for (int j = 0; j < 12; ++j)
+      for (int k = 0; k < 3; ++k) pos.emplace_back(0.5 * spacing * i, 0.5 * spacing * j, 0.5 * spacing * k);
+  std::vector<int> candidates(pos.size());
+  std::iota(candidates.begin(), candidates.end(), 0);
+  std::shuffle(candidates.begin(), candidates.end(), rng);
+  candidates.resize(candidates.size() * 3 / 4);  // some points are no candidates
+  const Eigen::Vector3d origin(0, 0, 0);
+  const std::vector<int> seeds = spaced_seeds(pos, origin, candidates, spacing);
+  EXPECT_EQ(seeds, seeds_by_definition(pos, candidates, spacing));
+  EXPECT_GT(seeds.size(), 100u);
+  EXPECT_LT(seeds.size(), candidates.size() / 2);
 }
 
 TEST(WorkingMesh, IsAClosedManifoldNearThePartWithCreasesKept) {
