@@ -1,6 +1,7 @@
 #include "kth_value.h"
 
 #include <algorithm>
+#include <array>
 
 #include <tbb/parallel_for.h>
 
@@ -30,24 +31,30 @@ double kth_value(std::vector<double>& values, std::size_t k) {
   std::sort(sample.begin(), sample.end());
   const std::size_t at = std::min(kSample - 1, k / (n / kSample));
   const double lo = sample[at > kReach ? at - kReach : 0], hi = sample[std::min(kSample - 1, at + kReach)];
-  // Per block: how many lie below the bracket and above it, and those inside it.
+  // Per block: how many lie below the bracket, inside it, above it, and compare as none (NaN).
   const std::size_t blocks = (n + kBlock - 1) / kBlock;
-  std::vector<std::size_t> below(blocks, 0), above(blocks, 0);
-  std::vector<std::vector<double>> inside(blocks);
+  std::vector<std::array<std::size_t, 4>> counts(blocks, {0, 0, 0, 0});
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
     const std::size_t end = std::min(n, (b + 1) * kBlock);
     for (std::size_t i = b * kBlock; i < end; ++i) {
       const double v = values[i];
-      if (v < lo) ++below[b];
-      else if (v > hi) ++above[b];
-      else if (v <= hi) inside[b].push_back(v);
+      ++counts[b][v < lo ? 0 : v > hi ? 2 : v >= lo ? 1 : 3];
     }
   });
-  std::size_t under = 0, over = 0, count = 0;
-  for (std::size_t b = 0; b < blocks; ++b) under += below[b], over += above[b], count += inside[b].size();
-  // Values that compare as none of the three (NaN) leave the counts short: then, as when the
-  // bracket misses, the whole set decides.
-  if (under + count + over != n || k < under || k >= under + count) return whole();
+  std::size_t under = 0, count = 0, nan = 0;
+  for (const auto& c : counts) under += c[0], count += c[1], nan += c[3];
+  // With a NaN among them, or a bracket that misses the k-th, the whole set decides.
+  if (nan > 0 || k < under || k >= under + count) return whole();
+  if (lo == hi) return lo;  // (a CAD mesh's flat edges: most of the values are one)
+  // A bracket holding a large share of the values saves nothing.
+  if (count > n / 4) return whole();
+  std::vector<std::vector<double>> inside(blocks);
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+    const std::size_t end = std::min(n, (b + 1) * kBlock);
+    inside[b].reserve(counts[b][1]);
+    for (std::size_t i = b * kBlock; i < end; ++i)
+      if (values[i] >= lo && values[i] <= hi) inside[b].push_back(values[i]);
+  });
   std::vector<double> bracket;
   bracket.reserve(count);
   for (const auto& part : inside) bracket.insert(bracket.end(), part.begin(), part.end());

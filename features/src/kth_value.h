@@ -7,9 +7,11 @@
 namespace s2c::features {
 
 /// The value std::nth_element would place at position k (k < values.size()); `values` may be
-/// reordered. A sorted sample brackets the k-th value, the values inside the bracket are gathered
-/// on all cores and the k-th is found among them; when the bracket misses it (values the sample
-/// does not represent), nth_element over all of them.
+/// reordered. A sorted sample brackets the k-th value and the values are counted against it on all
+/// cores; then the k-th is the bracket's one value when it holds one (a CAD mesh's flat edges),
+/// else it is found among the values inside, gathered on all cores. When the bracket misses it
+/// (values the sample does not represent), holds a quarter of them or more, or a value is NaN,
+/// nth_element over all of them.
 double kth_value(std::vector<double>& values, std::size_t k);
 
 }  // namespace s2c::features
