@@ -235,15 +235,17 @@ std::vector<int> spaced_seeds(const std::vector<Eigen::Vector3d>& pos, const Eig
   // 0.16 s, one core, for the 280 k candidates of a smooth mesh's working mesh).
   const int n = static_cast<int>(candidates.size());
   const double width = 2 * spacing;
-  // Cell coordinates are shifted by one, so the cells below the box's corner have keys too; cells
-  // beyond 21 bits share keys, which only lengthens their chains.
+  // Cell coordinates from -1 (a candidate's lower neighbours at the corner) to 2^21 - 2, each
+  // shifted by one into 21 bits of the key. Points farther out (stray vertices of debris far from
+  // the part) share the last cells, which only lengthens those cells' chains.
   auto key = [](const Eigen::Vector3i& c) {
     auto bits = [](int x) { return static_cast<std::uint64_t>(std::clamp(x + 1, 0, 2097151)); };
     return bits(c.x()) << 42 | bits(c.y()) << 21 | bits(c.z());
   };
   auto grid = [&](int v) { return Eigen::Vector3d((pos[v] - origin) / width); };
   auto floor3 = [](const Eigen::Vector3d& q) {
-    return Eigen::Vector3i(static_cast<int>(std::floor(q.x())), static_cast<int>(std::floor(q.y())), static_cast<int>(std::floor(q.z())));
+    auto cell = [](double x) { return static_cast<int>(std::clamp(std::floor(x), -1.0, 2097150.0)); };
+    return Eigen::Vector3i(cell(q.x()), cell(q.y()), cell(q.z()));
   };
   std::vector<std::uint64_t> own(n);
   tbb::parallel_for(0, n, [&](int i) { own[i] = key(floor3(grid(candidates[i]))); });

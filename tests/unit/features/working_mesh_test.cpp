@@ -63,6 +63,12 @@ TEST(WorkingMesh, SeedsAreTheCandidatesWithNoEarlierSeedWithinTheSpacing) {
   std::iota(candidates.begin(), candidates.end(), 0);
   std::shuffle(candidates.begin(), candidates.end(), rng);
   candidates.resize(candidates.size() * 3 / 4);  // some points are no candidates
+  // Stray vertices far beyond the grid's 2^21 cells, two of them closer than the spacing.
+  for (const Eigen::Vector3d& far : {Eigen::Vector3d(1e12, 1, 1), Eigen::Vector3d(1e12 + 0.1, 1, 1),
+                                     Eigen::Vector3d(1, 1e9, 5e11), Eigen::Vector3d(7e11, 1, 1)}) {
+    pos.push_back(far);
+    candidates.push_back(static_cast<int>(pos.size()) - 1);
+  }
   const Eigen::Vector3d origin(0, 0, 0);
   const std::vector<int> seeds = spaced_seeds(pos, origin, candidates, spacing);
   EXPECT_EQ(seeds, seeds_by_definition(pos, candidates, spacing));
