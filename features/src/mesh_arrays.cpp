@@ -220,8 +220,8 @@ bool add_manifold_edges(MeshArrays& m) {
   // The faces across the sides. Each side a → b with a < b is looked up and, when it finds a
   // face g across, sets g's side b → a too: that is the one face whose lookup would find f (any
   // other face on the edge makes f's lookup a bad edge), and only f's lookup writes it. The
-  // sides left over (a boundary, or b → a with no a → b) are looked up after. Half the lookups:
-  // they were half the arrays' time on a million faces.
+  // sides left unlooked (a boundary, or b → a with no a → b) are looked up after. Half the
+  // lookups: they were half the arrays' time on the 1.7 M faces of a scan's Poisson mesh.
   std::vector<std::array<int, 3>> across(nf, {kUnlooked, kUnlooked, kUnlooked});
   std::atomic<bool> manifold{true};
   tbb::parallel_for(0, nf, [&](int f) {
@@ -239,7 +239,7 @@ bool add_manifold_edges(MeshArrays& m) {
   tbb::parallel_for(0, nf, [&](int f) {
     int fresh = 0;
     for (int i = 0; i < 3; ++i) {
-      if (m.tri[f][i] > m.tri[f][(i + 1) % 3] && across[f][i] == kUnlooked) {
+      if (across[f][i] == kUnlooked) {
         across[f][i] = face_across_side(m, f, i);
         if (across[f][i] == kBadEdge) manifold = false;
       }

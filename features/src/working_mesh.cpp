@@ -235,20 +235,13 @@ std::vector<int> spaced_seeds(const std::vector<Eigen::Vector3d>& pos, const Eig
   // 0.16 s, one core, for the 280 k candidates of a smooth mesh's working mesh).
   const int n = static_cast<int>(candidates.size());
   const double width = 2 * spacing;
-  // Cell coordinates from -1 (a candidate's lower neighbours at the corner) to 2^21 - 2, each
-  // shifted by one into 21 bits of the key. Points farther out (stray vertices of debris far from
-  // the part) share the last cells, which only lengthens those cells' chains.
-  auto key = [](const Eigen::Vector3i& c) {
-    auto bits = [](int x) { return static_cast<std::uint64_t>(std::clamp(x + 1, 0, 2097151)); };
-    return bits(c.x()) << 42 | bits(c.y()) << 21 | bits(c.z());
-  };
-  auto grid = [&](int v) { return Eigen::Vector3d((pos[v] - origin) / width); };
-  auto floor3 = [](const Eigen::Vector3d& q) {
-    auto cell = [](double x) { return static_cast<int>(std::clamp(std::floor(x), -1.0, 2097150.0)); };
-    return Eigen::Vector3i(cell(q.x()), cell(q.y()), cell(q.z()));
-  };
+  // Keys of the grid shifted by one cell, so that a candidate's lower neighbours at the corner
+  // have keys too; cell_key clamps points far beyond the grid (stray vertices of debris) into its
+  // last cells, which only lengthens those cells' chains.
+  const Eigen::Vector3d corner = origin - Eigen::Vector3d::Constant(width);
+  auto key = [&](const Eigen::Vector3d& p) { return cell_key(p, corner, width); };
   std::vector<std::uint64_t> own(n);
-  tbb::parallel_for(0, n, [&](int i) { own[i] = key(floor3(grid(candidates[i]))); });
+  tbb::parallel_for(0, n, [&](int i) { own[i] = key(pos[candidates[i]]); });
   std::vector<std::uint64_t> cells = own;
   tbb::parallel_sort(cells.begin(), cells.end());
   cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
@@ -260,11 +253,11 @@ std::vector<int> spaced_seeds(const std::vector<Eigen::Vector3d>& pos, const Eig
   // differing in z only are neighbours in the sorted keys.
   std::vector<std::array<int, 9>> near(n);
   tbb::parallel_for(0, n, [&](int i) {
-    const Eigen::Vector3i low = floor3(grid(candidates[i]) - Eigen::Vector3d::Constant(0.5));
+    const Eigen::Vector3d& p = pos[candidates[i]];
     int k = 0;
     for (int dx = 0; dx <= 1; ++dx)
       for (int dy = 0; dy <= 1; ++dy) {
-        const std::uint64_t lower = key(low + Eigen::Vector3i(dx, dy, 0));
+        const std::uint64_t lower = key(p + width * Eigen::Vector3d(dx - 0.5, dy - 0.5, -0.5));
         const auto it = std::lower_bound(cells.begin(), cells.end(), lower);
         const bool found = it != cells.end() && *it == lower;
         near[i][k++] = found ? static_cast<int>(it - cells.begin()) : -1;
