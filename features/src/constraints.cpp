@@ -6,7 +6,8 @@
 // patches they touch of 5 × that area or more (kEdgeFaceArea: a straight line from corner to
 // corner, both ends on planes next to both patches; a closed circle), whose shape is not freeform
 // and whose numbers are usable
-// (finite, a non-zero direction, radius / length > 0, cone half angle in (0°, 90°)). Feature order
+// (finite, a non-zero direction, radius / length > 0, cone half angle in (0°, 90°)); with
+// min_patch_area set, not a straight line within the position tolerance long. Feature order
 // is patches then lines, each in file order; members are listed in that order.
 //
 // Tolerances: angles `angle_tol_deg` (parallel: |cos| ≥ cos tol, perpendicular: |cos| ≤ sin tol);
@@ -27,7 +28,7 @@
 //                  each other; a sphere joins when its centre is on the axis of exactly one class.
 //   concentric     circles/arcs: centres within the position tolerance, normals parallel (±).
 //   equal_radius   cylinders+spheres as one family, circles+arcs as another.
-//   equal_length   straight lines.
+//   equal_length   straight lines longer than the position tolerance.
 //   collinear      straight lines: parallel, each one's ends on the other's infinite line.
 //   equal_angle    fixed_angle constraints whose angles agree within the angle tolerance: members
 //                  are those groups' ids (groups of groups), value = their mean, rounded to 0.1°.
@@ -220,6 +221,11 @@ class Detector {
       const int i = np_ + l;
       shape_[i] = usable(f.lines[l].shape);
       if (shape_[i] && is_surface(shape_[i]->type)) shape_[i].reset();
+      // On a scan a straight line no longer than the position tolerance is a corner's stub (a
+      // face of one patch poking past the corner, a mesh edge or two): its direction is the
+      // zigzag of those edges and its ends are the corner's, give or take the tolerance.
+      if (o.min_patch_area > 0 && shape_[i] && shape_[i]->type == ShapeType::line && !(shape_[i]->length > len_tol_))
+        shape_[i].reset();
       line_[i] = &f.lines[l];
       index.emplace(f.lines[l].id, i);
     }
@@ -502,7 +508,11 @@ class Detector {
       if (type(a) == ShapeType::line && type(b) == ShapeType::line && perpendicular(s(a).dir, s(b).dir) &&
           (keys[a].empty() || keys[b].empty()))
         add(ConstraintKind::perpendicular, {a, b});
-    add_classes(ConstraintKind::equal_length, classes(straight_, [&](int a, int b) {
+    // Lengths within the tolerance of zero are equal by the tolerance whatever they are.
+    std::vector<int> measurable;
+    for (int l : straight_)
+      if (s(l).length > len_tol_) measurable.push_back(l);
+    add_classes(ConstraintKind::equal_length, classes(measurable, [&](int a, int b) {
                   const double la = s(a).length, lb = s(b).length;
                   return std::abs(la - lb) <= std::max(o_.radius_rel_tol * std::max(la, lb), len_tol_);
                 }));

@@ -798,6 +798,43 @@ TEST(ConstraintsTest, CollinearAndConnectedLines) {
   EXPECT_FALSE(has(f, ConstraintKind::perpendicular, {"L2", "L3"}));
 }
 
+// A scan's corner stub (one face of a patch poking past a corner: a line of a mesh edge or two)
+// is no longer than the position tolerance: no length, end or direction of it is a designed one.
+// On a clean tessellation its ends and direction are exact; only its length is not measurable.
+TEST(ConstraintsTest, LinesNoLongerThanThePositionToleranceTakeNoPart) {
+  auto corner = [](double stub, bool scan) {
+    FeatureSet f;
+    auto seg = [&](Vector3d a, Vector3d b, int va, int vb) {
+      Line l;
+      l.id = "L" + std::to_string(f.lines.size());
+      l.shape = make_shape(ShapeType::line, a, b - a, 0, (b - a).norm());
+      l.vertices = {va, 100 + static_cast<int>(f.lines.size()), vb};
+      f.lines.push_back(l);
+    };
+    const Vector3d c(0, 0, 40);
+    seg({0, 0, 6}, c, 0, 1);                                            // the long edge up to the corner
+    seg(c, c + stub * Vector3d(0, 0.82, 0.58).normalized(), 1, 2);      // two stubs from its end,
+    seg(c, c + stub * Vector3d(-0.26, 0.9, 0.35).normalized(), 1, 3);  // of one length
+    ConstraintOptions o;
+    o.diagonal = 100;                      // position tolerance 0.5 mm
+    o.min_patch_area = scan ? 1.0 : 0.0;  // (no patches here: only the scan rules it switches on)
+    detect_constraints(f, o);
+    return f;
+  };
+  const FeatureSet scan_stubs = corner(0.14, true);
+  EXPECT_EQ(count(scan_stubs, ConstraintKind::equal_length), 0);
+  EXPECT_EQ(count(scan_stubs, ConstraintKind::connected), 0);
+  const FeatureSet clean_stubs = corner(0.14, false);
+  EXPECT_EQ(count(clean_stubs, ConstraintKind::equal_length), 0);
+  EXPECT_TRUE(has(clean_stubs, ConstraintKind::connected, {"L0", "L1"}));
+  // Lines of the same shape twice the tolerance long take part.
+  const FeatureSet edges = corner(1.0, true);
+  expect_all_hold(edges);
+  EXPECT_TRUE(has(edges, ConstraintKind::connected, {"L0", "L1"}));
+  EXPECT_TRUE(has(edges, ConstraintKind::connected, {"L0", "L2"}));
+  EXPECT_TRUE(has(edges, ConstraintKind::equal_length, {"L1", "L2"}));
+}
+
 TEST(ConstraintsTest, MovedHoleIsNotSymmetric) {
   Part p = load_part("plate");
   p.shape("hole_1").point.x() += 1.0;

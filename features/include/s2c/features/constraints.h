@@ -22,7 +22,8 @@ struct ConstraintOptions {
   /// (a constriction inside a hole the scanner never saw, leftovers along rounded edges), whose
   /// chance alignments would be stated as constraints. Except a line that is the intersection of
   /// two patches it touches, each of at least 5 × this area: a scan's edge along its rounding.
-  /// 0: every patch takes part.
+  /// When it is > 0, straight lines no longer than the position tolerance (a corner's stub) take
+  /// no part either. 0: every patch takes part.
   double min_patch_area = 0.0;
   /// fixed_angle needs the patches to meet at least at this angle (degrees; 0: above the angle
   /// tolerance). On scan meshes the analysis sets it to the smallest crease angle it detects:
