@@ -774,15 +774,18 @@ TEST(ConstraintsTest, FixedAngleBelowTheMinimumIsNotStated) {
     }
 }
 
+/// Appends the straight line from a to b, its chain from vertex va over a vertex of its own to vb.
+void add_segment(FeatureSet& f, const Vector3d& a, const Vector3d& b, int va, int vb) {
+  Line l;
+  l.id = "L" + std::to_string(f.lines.size());
+  l.shape = make_shape(ShapeType::line, a, b - a, 0, (b - a).norm());
+  l.vertices = {va, 100 + static_cast<int>(f.lines.size()), vb};
+  f.lines.push_back(l);
+}
+
 TEST(ConstraintsTest, CollinearAndConnectedLines) {
   FeatureSet f;
-  auto seg = [&](Vector3d a, Vector3d b, int va, int vb) {
-    Line l;
-    l.id = "L" + std::to_string(f.lines.size());
-    l.shape = make_shape(ShapeType::line, a, b - a, 0, (b - a).norm());
-    l.vertices = {va, 100 + static_cast<int>(f.lines.size()), vb};
-    f.lines.push_back(l);
-  };
+  auto seg = [&](Vector3d a, Vector3d b, int va, int vb) { add_segment(f, a, b, va, vb); };
   seg({0, 0, 0}, {10, 0, 0}, 0, 1);
   seg({20, 0, 0}, {35, 0, 0}, 2, 3);  // collinear with L0
   seg({10, 0, 0}, {10, 10, 0}, 1, 4);  // connected to L0 at vertex 1, square to it
@@ -804,13 +807,7 @@ TEST(ConstraintsTest, CollinearAndConnectedLines) {
 TEST(ConstraintsTest, LinesNoLongerThanThePositionToleranceTakeNoPart) {
   auto corner = [](double stub, bool scan) {
     FeatureSet f;
-    auto seg = [&](Vector3d a, Vector3d b, int va, int vb) {
-      Line l;
-      l.id = "L" + std::to_string(f.lines.size());
-      l.shape = make_shape(ShapeType::line, a, b - a, 0, (b - a).norm());
-      l.vertices = {va, 100 + static_cast<int>(f.lines.size()), vb};
-      f.lines.push_back(l);
-    };
+    auto seg = [&](Vector3d a, Vector3d b, int va, int vb) { add_segment(f, a, b, va, vb); };
     const Vector3d c(0, 0, 40);
     seg({0, 0, 6}, c, 0, 1);                                            // the long edge up to the corner
     seg(c, c + stub * Vector3d(0, 0.82, 0.58).normalized(), 1, 2);      // two stubs from its end,
