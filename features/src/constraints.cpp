@@ -7,7 +7,8 @@
 // corner, both ends on planes next to both patches; a closed circle), whose shape is not freeform
 // and whose numbers are usable
 // (finite, a non-zero direction, radius / length > 0, cone half angle in (0°, 90°)); with
-// min_patch_area set, not a straight line within the position tolerance long. Feature order
+// min_patch_area set, not a straight line within the position tolerance long, nor one touching
+// planes only, two or more, in the direction of none of their edges. Feature order
 // is patches then lines, each in file order; members are listed in that order.
 //
 // Tolerances: angles `angle_tol_deg` (parallel: |cos| ≥ cos tol, perpendicular: |cos| ≤ sin tol);
@@ -257,6 +258,12 @@ class Detector {
           if (k < np_ && doubtful_[k]) doubtful_of_[i].push_back(k);
         std::sort(doubtful_of_[i].begin(), doubtful_of_[i].end());
       }
+    // On a scan, a straight line between planes only that runs in the direction of no two of
+    // them cuts across a rounded corner (the pocket's top corners: 0.6 mm diagonals from the
+    // corner down into the rounding): no CAD edge, and its ends sit on the edges it cuts.
+    if (o.min_patch_area > 0)
+      for (int l = np_; l < n; ++l)
+        if (shape_[l] && type(l) == ShapeType::line && across_planes(l)) shape_[l].reset();
     for (int l : doubtful_lines) {
       std::pair<int, int> edge;
       if (!shape_[l]) continue;
@@ -360,6 +367,25 @@ class Detector {
       x[i] < y[j] ? ++i : ++j;
     }
     return false;
+  }
+
+  /// Does straight line `l` touch usable planes only, at least two, and run in the direction of
+  /// no two of them (square to both normals, the planes not parallel)?
+  bool across_planes(int l) const {
+    std::vector<int> planes;
+    for (int p : nbr_[l]) {
+      if (p >= np_ || !shape_[p]) continue;
+      if (type(p) != ShapeType::plane) return false;
+      planes.push_back(p);
+    }
+    if (planes.size() < 2) return false;
+    const Vector3d& d = s(l).dir;
+    for (std::size_t i = 0; i < planes.size(); ++i)
+      for (std::size_t j = i + 1; j < planes.size(); ++j) {
+        const Vector3d &n = s(planes[i]).dir, &m = s(planes[j]).dir;
+        if (perpendicular(d, n) && perpendicular(d, m) && !parallel(n, m)) return false;
+      }
+    return true;
   }
 
   /// Whether both ends of straight line l, the edge of large planes `edge`, lie on a large plane

@@ -953,27 +953,40 @@ TEST(ConstraintsTest, PlanesAcrossARoundedEdgeAreNeighboursOnNoisyMeshes) {
   EXPECT_FALSE(has(f, ConstraintKind::perpendicular, {side, far}));
 }
 
+/// Appends a patch of `area` mm² and returns its id.
+std::string add_patch(FeatureSet& f, ShapeType type, const Vector3d& point, const Vector3d& normal, double area) {
+  Patch p;
+  p.id = "P" + std::to_string(f.patches.size());
+  p.area = area;
+  p.shape = make_shape(type, point, normal);
+  f.patches.push_back(p);
+  return p.id;
+}
+
+/// Appends the straight line from `from` to `to`, adjacent to the patches `touches`, and returns
+/// its id. Its chain is `vertices`, or two vertices no other line has.
+std::string add_line(FeatureSet& f, const Vector3d& from, const Vector3d& to, const std::vector<std::string>& touches,
+                     std::vector<int> vertices = {}) {
+  Line l;
+  l.id = "L" + std::to_string(f.lines.size());
+  l.shape = make_shape(ShapeType::line, from, to - from, 0, (to - from).norm());
+  l.vertices = vertices.empty() ? std::vector<int>{static_cast<int>(2 * f.lines.size()), static_cast<int>(2 * f.lines.size() + 1)}
+                                : std::move(vertices);
+  for (const auto& p : touches) f.adjacency.emplace_back(p, l.id);
+  f.lines.push_back(l);
+  return l.id;
+}
+
 TEST(ConstraintsTest, AScansEdgeAlongARoundedBandTakesPartAndItsLengthOnlyCornerToCorner) {
   // The top edges of a 50 × 50 box whose scan rounded them into one freeform band. A line touching
   // the band takes part when it is a whole edge: the intersection of two planes it touches, both
   // ends on planes next to both (corners).
   FeatureSet f;
   auto patch = [&](ShapeType type, const Vector3d& point, const Vector3d& normal, double area) {
-    Patch p;
-    p.id = "P" + std::to_string(f.patches.size());
-    p.area = area;
-    p.shape = make_shape(type, point, normal);
-    f.patches.push_back(p);
-    return p.id;
+    return add_patch(f, type, point, normal, area);
   };
   auto line = [&](const Vector3d& from, const Vector3d& to, std::vector<std::string> touches) {
-    Line l;
-    l.id = "L" + std::to_string(f.lines.size());
-    l.shape = make_shape(ShapeType::line, from, to - from, 0, (to - from).norm());
-    l.vertices = {static_cast<int>(2 * f.lines.size()), static_cast<int>(2 * f.lines.size() + 1)};
-    for (const auto& p : touches) f.adjacency.emplace_back(p, l.id);
-    f.lines.push_back(l);
-    return l.id;
+    return add_line(f, from, to, touches);
   };
   const std::string top = patch(ShapeType::plane, Vector3d(0, 0, 20), Vector3d::UnitZ(), 2500);
   const std::string xp = patch(ShapeType::plane, Vector3d(25, 0, 10), Vector3d::UnitX(), 1000);
@@ -1008,6 +1021,32 @@ TEST(ConstraintsTest, AScansEdgeAlongARoundedBandTakesPartAndItsLengthOnlyCorner
   unbanded.patches.pop_back();
   detect_constraints(unbanded, o);
   EXPECT_TRUE(grouped(unbanded, ConstraintKind::equal_length, {whole_xp, whole_xn, piece_yp}));
+}
+
+// A scan rounds the corner where a pocket's top meets two of its walls; a 0.57 mm line runs from
+// the corner diagonally down into the rounding, along none of the three planes' edges.
+TEST(ConstraintsTest, ALineAcrossARoundedCornerTakesNoPartOnScans) {
+  auto corner = [](bool scan) {
+    FeatureSet f;
+    const std::string top = add_patch(f, ShapeType::plane, Vector3d(0, 0, 20), Vector3d::UnitZ(), 1800);
+    const std::string wall_y = add_patch(f, ShapeType::plane, Vector3d(0, -10, 15), -Vector3d::UnitY(), 200);
+    const std::string wall_x = add_patch(f, ShapeType::plane, Vector3d(15, 0, 15), Vector3d::UnitX(), 200);
+    add_line(f, {-15, -10, 20}, {15, -10, 20}, {top, wall_y}, {0, 1});  // L0, the top's edges
+    add_line(f, {15, -10, 20}, {15, 10, 20}, {top, wall_x}, {1, 2});    // L1
+    const Vector3d from(14.7, -10.0, 19.86);
+    add_line(f, from, from + 0.57 * Vector3d(0.40, 0.37, -0.84).normalized(), {top, wall_y, wall_x}, {1, 3});
+    ConstraintOptions o;
+    o.diagonal = 100;  // position tolerance 0.5 mm: the diagonal is longer
+    o.min_patch_area = scan ? 10.0 : 0.0;
+    detect_constraints(f, o);
+    return f;
+  };
+  const FeatureSet scan = corner(true);
+  EXPECT_TRUE(has(scan, ConstraintKind::connected, {"L0", "L1"}));
+  for (const Group* g : constraints(scan))
+    for (const auto& m : g->members) EXPECT_NE(m, "L2") << "in " << g->id;
+  const FeatureSet clean = corner(false);
+  EXPECT_TRUE(has(clean, ConstraintKind::connected, {"L0", "L2"}));
 }
 
 TEST(ConstraintsTest, EmptySetGivesNothing) {

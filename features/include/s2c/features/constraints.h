@@ -23,7 +23,8 @@ struct ConstraintOptions {
   /// chance alignments would be stated as constraints. Except a line that is the intersection of
   /// two patches it touches, each of at least 5 × this area: a scan's edge along its rounding.
   /// When it is > 0, straight lines no longer than the position tolerance (a corner's stub) take
-  /// no part either. 0: every patch takes part.
+  /// no part either, nor lines touching only planes, two or more, in the direction of none of
+  /// their edges (across a rounded corner). 0: every patch takes part.
   double min_patch_area = 0.0;
   /// fixed_angle needs the patches to meet at least at this angle (degrees; 0: above the angle
   /// tolerance). On scan meshes the analysis sets it to the smallest crease angle it detects:
