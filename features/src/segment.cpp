@@ -639,6 +639,7 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
   auto fit_region = [&](Region& r) {
     r.fit = choose_shape(region_samples(m, normals, r.faces), p);
     r.area = area_of(m, r.faces);
+    r.fitted_faces = r.faces.size();
   };
   tbb::parallel_for(0, static_cast<int>(seg.regions.size()), [&](int r) { fit_region(seg.regions[r]); });
   log_regions("seed", seg.regions);
@@ -690,7 +691,11 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
     drop_regions(seg, crumb);
     if (seg.regions.size() < before) {
       grow_regions(m, normals, p, seg);
-      tbb::parallel_for(0, static_cast<int>(seg.regions.size()), [&](int r) { fit_region(seg.regions[r]); });
+      // A region the crumbs did not reach and whose fit was chosen afresh keeps it (a split's
+      // parts were fitted from warm starts: they are chosen afresh like the grown ones).
+      tbb::parallel_for(0, static_cast<int>(seg.regions.size()), [&](int r) {
+        if (seg.regions[r].fitted_faces != seg.regions[r].faces.size()) fit_region(seg.regions[r]);
+      });
     }
     seg.absorbed = before - seg.regions.size();
   }

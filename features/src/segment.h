@@ -28,6 +28,9 @@ struct Region {
   std::vector<int> faces;
   Fit fit;  ///< fit.shape.type == freeform when no primitive is accepted
   double area = 0.0;
+  /// faces.size() when `fit` was last chosen afresh for exactly these faces (choose_shape), else
+  /// 0: regions only grow, so an equal size means the same faces and the same fit.
+  std::size_t fitted_faces = 0;
 };
 
 struct Segmentation {
