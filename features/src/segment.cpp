@@ -644,9 +644,16 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
   tbb::parallel_for(0, static_cast<int>(seg.regions.size()), [&](int r) { fit_region(seg.regions[r]); });
   log_regions("seed", seg.regions);
 
+  // A region whose fit was chosen afresh for its faces keeps it until it gains faces (regions
+  // only grow, so an equal count means the same faces).
+  auto refit_grown = [&] {
+    tbb::parallel_for(0, static_cast<int>(seg.regions.size()), [&](int r) {
+      if (seg.regions[r].fitted_faces != seg.regions[r].faces.size()) fit_region(seg.regions[r]);
+    });
+  };
   if (p.noisy) {
     grow_regions(m, normals, p, seg);
-    tbb::parallel_for(0, static_cast<int>(seg.regions.size()), [&](int r) { fit_region(seg.regions[r]); });
+    refit_grown();
     log_regions("grown", seg.regions);
   }
 
@@ -691,11 +698,7 @@ Segmentation segment(const MeshArrays& m, const std::vector<Eigen::Vector3d>& no
     drop_regions(seg, crumb);
     if (seg.regions.size() < before) {
       grow_regions(m, normals, p, seg);
-      // A region the crumbs did not reach and whose fit was chosen afresh keeps it (a split's
-      // parts were fitted from warm starts: they are chosen afresh like the grown ones).
-      tbb::parallel_for(0, static_cast<int>(seg.regions.size()), [&](int r) {
-        if (seg.regions[r].fitted_faces != seg.regions[r].faces.size()) fit_region(seg.regions[r]);
-      });
+      refit_grown();  // (a split's parts, fitted from warm starts, are fitted afresh)
     }
     seg.absorbed = before - seg.regions.size();
   }
