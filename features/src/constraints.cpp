@@ -222,11 +222,6 @@ class Detector {
       const int i = np_ + l;
       shape_[i] = usable(f.lines[l].shape);
       if (shape_[i] && is_surface(shape_[i]->type)) shape_[i].reset();
-      // On a scan a straight line no longer than the position tolerance is a corner's stub (a
-      // face of one patch poking past the corner, a mesh edge or two): its direction is the
-      // zigzag of those edges and its ends are the corner's, give or take the tolerance.
-      if (o.min_patch_area > 0 && shape_[i] && shape_[i]->type == ShapeType::line && !(shape_[i]->length > len_tol_))
-        shape_[i].reset();
       line_[i] = &f.lines[l];
       index.emplace(f.lines[l].id, i);
     }
@@ -258,12 +253,17 @@ class Detector {
           if (k < np_ && doubtful_[k]) doubtful_of_[i].push_back(k);
         std::sort(doubtful_of_[i].begin(), doubtful_of_[i].end());
       }
-    // On a scan, a straight line between planes only that runs in the direction of no two of
-    // them cuts across a rounded corner (the pocket's top corners: 0.6 mm diagonals from the
-    // corner down into the rounding): no CAD edge, and its ends sit on the edges it cuts.
+    // On a scan two kinds of straight line are no CAD edge:
+    // - one no longer than the position tolerance is a corner's stub (a face of one patch poking
+    //   past the corner, a mesh edge or two): its direction is the zigzag of those edges and its
+    //   ends are the corner's, give or take the tolerance;
+    // - one between planes only that runs in the direction of no two of them cuts across a
+    //   rounded corner (the pocket's top corners: 0.6 mm diagonals from the corner down into the
+    //   rounding), its ends on the edges it cuts.
     if (o.min_patch_area > 0)
       for (int l = np_; l < n; ++l)
-        if (shape_[l] && type(l) == ShapeType::line && across_planes(l)) shape_[l].reset();
+        if (shape_[l] && type(l) == ShapeType::line && (!(s(l).length > len_tol_) || across_planes(l)))
+          shape_[l].reset();
     for (int l : doubtful_lines) {
       std::pair<int, int> edge;
       if (!shape_[l]) continue;

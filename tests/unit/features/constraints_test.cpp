@@ -774,18 +774,35 @@ TEST(ConstraintsTest, FixedAngleBelowTheMinimumIsNotStated) {
     }
 }
 
-/// Appends the straight line from a to b, its chain from vertex va over a vertex of its own to vb.
-void add_segment(FeatureSet& f, const Vector3d& a, const Vector3d& b, int va, int vb) {
+/// Appends a patch of `area` mm² and returns its id.
+std::string add_patch(FeatureSet& f, ShapeType type, const Vector3d& point, const Vector3d& normal, double area) {
+  Patch p;
+  p.id = "P" + std::to_string(f.patches.size());
+  p.area = area;
+  p.shape = make_shape(type, point, normal);
+  f.patches.push_back(p);
+  return p.id;
+}
+
+/// Appends the straight line from `from` to `to`, adjacent to the patches `touches`, and returns
+/// its id. Its chain is `vertices`, or two vertices no other line has.
+std::string add_line(FeatureSet& f, const Vector3d& from, const Vector3d& to, const std::vector<std::string>& touches,
+                     std::vector<int> vertices = {}) {
   Line l;
   l.id = "L" + std::to_string(f.lines.size());
-  l.shape = make_shape(ShapeType::line, a, b - a, 0, (b - a).norm());
-  l.vertices = {va, 100 + static_cast<int>(f.lines.size()), vb};
+  l.shape = make_shape(ShapeType::line, from, to - from, 0, (to - from).norm());
+  l.vertices = vertices.empty() ? std::vector<int>{static_cast<int>(2 * f.lines.size()), static_cast<int>(2 * f.lines.size() + 1)}
+                                : std::move(vertices);
+  for (const auto& p : touches) f.adjacency.emplace_back(p, l.id);
   f.lines.push_back(l);
+  return l.id;
 }
 
 TEST(ConstraintsTest, CollinearAndConnectedLines) {
   FeatureSet f;
-  auto seg = [&](Vector3d a, Vector3d b, int va, int vb) { add_segment(f, a, b, va, vb); };
+  auto seg = [&](Vector3d a, Vector3d b, int va, int vb) {
+    add_line(f, a, b, {}, {va, 100 + static_cast<int>(f.lines.size()), vb});  // a vertex of its own between
+  };
   seg({0, 0, 0}, {10, 0, 0}, 0, 1);
   seg({20, 0, 0}, {35, 0, 0}, 2, 3);  // collinear with L0
   seg({10, 0, 0}, {10, 10, 0}, 1, 4);  // connected to L0 at vertex 1, square to it
@@ -807,7 +824,9 @@ TEST(ConstraintsTest, CollinearAndConnectedLines) {
 TEST(ConstraintsTest, LinesNoLongerThanThePositionToleranceTakeNoPart) {
   auto corner = [](double stub, bool scan) {
     FeatureSet f;
-    auto seg = [&](Vector3d a, Vector3d b, int va, int vb) { add_segment(f, a, b, va, vb); };
+    auto seg = [&](Vector3d a, Vector3d b, int va, int vb) {
+      add_line(f, a, b, {}, {va, 100 + static_cast<int>(f.lines.size()), vb});  // a vertex of its own between
+    };
     const Vector3d c(0, 0, 40);
     seg({0, 0, 6}, c, 0, 1);                                            // the long edge up to the corner
     seg(c, c + stub * Vector3d(0, 0.82, 0.58).normalized(), 1, 2);      // two stubs from its end,
@@ -951,30 +970,6 @@ TEST(ConstraintsTest, PlanesAcrossARoundedEdgeAreNeighboursOnNoisyMeshes) {
   EXPECT_TRUE(has(f, ConstraintKind::perpendicular, {top, side}));
   EXPECT_FALSE(has(f, ConstraintKind::perpendicular, {top, far}));
   EXPECT_FALSE(has(f, ConstraintKind::perpendicular, {side, far}));
-}
-
-/// Appends a patch of `area` mm² and returns its id.
-std::string add_patch(FeatureSet& f, ShapeType type, const Vector3d& point, const Vector3d& normal, double area) {
-  Patch p;
-  p.id = "P" + std::to_string(f.patches.size());
-  p.area = area;
-  p.shape = make_shape(type, point, normal);
-  f.patches.push_back(p);
-  return p.id;
-}
-
-/// Appends the straight line from `from` to `to`, adjacent to the patches `touches`, and returns
-/// its id. Its chain is `vertices`, or two vertices no other line has.
-std::string add_line(FeatureSet& f, const Vector3d& from, const Vector3d& to, const std::vector<std::string>& touches,
-                     std::vector<int> vertices = {}) {
-  Line l;
-  l.id = "L" + std::to_string(f.lines.size());
-  l.shape = make_shape(ShapeType::line, from, to - from, 0, (to - from).norm());
-  l.vertices = vertices.empty() ? std::vector<int>{static_cast<int>(2 * f.lines.size()), static_cast<int>(2 * f.lines.size() + 1)}
-                                : std::move(vertices);
-  for (const auto& p : touches) f.adjacency.emplace_back(p, l.id);
-  f.lines.push_back(l);
-  return l.id;
 }
 
 TEST(ConstraintsTest, AScansEdgeAlongARoundedBandTakesPartAndItsLengthOnlyCornerToCorner) {
