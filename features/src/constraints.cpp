@@ -7,8 +7,8 @@
 // corner, both ends on planes next to both patches; a closed circle), whose shape is not freeform
 // and whose numbers are usable
 // (finite, a non-zero direction, radius / length > 0, cone half angle in (0°, 90°)); with
-// min_patch_area set, not a straight line within the position tolerance long, nor one touching
-// planes only, two or more, in the direction of none of their edges. Feature order
+// min_patch_area set, not a line (straight, arc or circle) within the position tolerance long,
+// nor a straight one touching planes only, two or more, in the direction of none of their edges. Feature order
 // is patches then lines, each in file order; members are listed in that order.
 //
 // Tolerances: angles `angle_tol_deg` (parallel: |cos| ≥ cos tol, perpendicular: |cos| ≤ sin tol);
@@ -73,6 +73,7 @@
 #include <array>
 #include <cmath>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <optional>
@@ -253,16 +254,17 @@ class Detector {
           if (k < np_ && doubtful_[k]) doubtful_of_[i].push_back(k);
         std::sort(doubtful_of_[i].begin(), doubtful_of_[i].end());
       }
-    // On a scan two kinds of straight line are no CAD edge:
-    // - one no longer than the position tolerance is a corner's stub (a face of one patch poking
-    //   past the corner, a mesh edge or two): its direction is the zigzag of those edges and its
-    //   ends are the corner's, give or take the tolerance;
-    // - one between planes only that runs in the direction of no two of them cuts across a
-    //   rounded corner (the pocket's top corners: 0.6 mm diagonals from the corner down into the
-    //   rounding), its ends on the edges it cuts.
+    // On a scan two kinds of line are no CAD edge:
+    // - one no longer than the position tolerance, whatever its shape, is a corner's stub (a face
+    //   of one patch poking past the corner, a mesh edge or two; an arc of a few edges round a
+    //   rounded corner, its radius a tenth of a millimetre): its direction, centre and radius are
+    //   the zigzag of those edges and its ends are the corner's, give or take the tolerance;
+    // - a straight one between planes only that runs in the direction of no two of them cuts
+    //   across a rounded corner (the pocket's top corners: 0.6 mm diagonals from the corner down
+    //   into the rounding), its ends on the edges it cuts.
     if (o.min_patch_area > 0)
       for (int l = np_; l < n; ++l)
-        if (shape_[l] && type(l) == ShapeType::line && (!(s(l).length > len_tol_) || across_planes(l)))
+        if (shape_[l] && (!(curve_length(s(l)) > len_tol_) || (type(l) == ShapeType::line && across_planes(l))))
           shape_[l].reset();
     for (int l : doubtful_lines) {
       std::pair<int, int> edge;
@@ -367,6 +369,17 @@ class Detector {
       x[i] < y[j] ? ++i : ++j;
     }
     return false;
+  }
+
+  /// The length of a line's curve: a straight line's, an arc's (radius × swept angle), a circle's
+  /// circumference; infinite for the other shapes (a freeform line has none to state).
+  static double curve_length(const Shape& c) {
+    switch (c.type) {
+      case ShapeType::line: return c.length;
+      case ShapeType::arc: return c.radius * c.angle_deg * M_PI / 180.0;
+      case ShapeType::circle: return 2 * M_PI * c.radius;
+      default: return std::numeric_limits<double>::infinity();
+    }
   }
 
   /// Does straight line `l` touch usable planes only, at least two, and run in the direction of

@@ -851,6 +851,52 @@ TEST(ConstraintsTest, LinesNoLongerThanThePositionToleranceTakeNoPart) {
   EXPECT_TRUE(has(edges, ConstraintKind::equal_length, {"L1", "L2"}));
 }
 
+/// Appends the arc of `radius` about `centre` in the plane square to `normal`, from `from` (on
+/// it) through `degrees`, with the chain `vertices`, and returns its id.
+std::string add_arc(FeatureSet& f, const Vector3d& centre, const Vector3d& normal, const Vector3d& from, double degrees,
+                    std::vector<int> vertices) {
+  Line l;
+  l.id = "L" + std::to_string(f.lines.size());
+  l.shape.type = ShapeType::arc;
+  l.shape.point = centre;
+  l.shape.dir = normal.normalized();
+  l.shape.radius = (from - centre).norm();
+  l.shape.start = from;
+  l.shape.end = centre + Eigen::AngleAxisd(degrees * M_PI / 180.0, l.shape.dir) * (from - centre);
+  l.shape.angle_deg = degrees;
+  l.vertices = std::move(vertices);
+  f.lines.push_back(l);
+  return l.id;
+}
+
+// The same for an arc: a few mesh edges round a scan's rounded corner fit a circle of a tenth of
+// a millimetre, whose centre and radius are that corner's zigzag (the bracket scan on a working
+// mesh of a seventh: a 163° arc of radius 0.135 mm at the corner of two edges, connected to both).
+TEST(ConstraintsTest, ArcsNoLongerThanThePositionToleranceTakeNoPartOnScans) {
+  auto corner = [](double radius, bool scan) {
+    FeatureSet f;
+    const Vector3d c(0, 0, 40);
+    add_line(f, {0, 0, 6}, c, {}, {0, 100, 1});                      // an edge up to the corner
+    add_arc(f, c + Vector3d(radius, 0, 0), {0, 1, 0}, c, 180, {1, 101, 2});  // round it
+    add_line(f, {50, 0, 40}, c + Vector3d(2 * radius, 0, 0), {}, {3, 102, 2});  // and on
+    ConstraintOptions o;
+    o.diagonal = 100;  // position tolerance 0.5 mm
+    o.min_patch_area = scan ? 1.0 : 0.0;
+    detect_constraints(f, o);
+    return f;
+  };
+  const FeatureSet scan_stub = corner(0.135, true);  // 0.42 mm of arc
+  EXPECT_EQ(count(scan_stub, ConstraintKind::connected), 0);
+  const FeatureSet clean_stub = corner(0.135, false);
+  EXPECT_TRUE(has(clean_stub, ConstraintKind::connected, {"L0", "L1"}));
+  EXPECT_TRUE(has(clean_stub, ConstraintKind::connected, {"L1", "L2"}));
+  // An arc of a 1 mm fillet (3.1 mm) is a designed curve: it takes part on a scan too.
+  const FeatureSet fillet = corner(1.0, true);
+  expect_all_hold(fillet);
+  EXPECT_TRUE(has(fillet, ConstraintKind::connected, {"L0", "L1"}));
+  EXPECT_TRUE(has(fillet, ConstraintKind::connected, {"L1", "L2"}));
+}
+
 TEST(ConstraintsTest, MovedHoleIsNotSymmetric) {
   Part p = load_part("plate");
   p.shape("hole_1").point.x() += 1.0;

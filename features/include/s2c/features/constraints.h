@@ -22,9 +22,9 @@ struct ConstraintOptions {
   /// (a constriction inside a hole the scanner never saw, leftovers along rounded edges), whose
   /// chance alignments would be stated as constraints. Except a line that is the intersection of
   /// two patches it touches, each of at least 5 × this area: a scan's edge along its rounding.
-  /// When it is > 0, straight lines no longer than the position tolerance (a corner's stub) take
-  /// no part either, nor lines touching only planes, two or more, in the direction of none of
-  /// their edges (across a rounded corner). 0: every patch takes part.
+  /// When it is > 0, lines no longer than the position tolerance (a corner's stub: straight, or
+  /// an arc or circle by its curve's length) take no part either, nor straight lines touching
+  /// only planes, two or more, in the direction of none of their edges (across a rounded corner). 0: every patch takes part.
   double min_patch_area = 0.0;
   /// fixed_angle needs the patches to meet at least at this angle (degrees; 0: above the angle
   /// tolerance). On scan meshes the analysis sets it to the smallest crease angle it detects:
