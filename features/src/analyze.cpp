@@ -247,8 +247,9 @@ Analysis analyze_arrays(const MeshArrays& m, const FeatureOptions& o, nlohmann::
   }
 
   t = Clock::now();
+  // (Through a working mesh the borders are a working edge precise: the lines' tolerance says so.)
   const std::vector<TracedLine> traced =
-      working ? trace_lines(m, std::cref(*fine_normals), seg, o.min_crease_deg, out.fit_tolerance, noisy)
+      working ? trace_lines(m, std::cref(*fine_normals), seg, o.min_crease_deg, out.fit_tolerance, noisy, a_edge)
               : trace_lines(m, normals, seg, o.min_crease_deg, out.fit_tolerance, noisy);
   timings["lines"] = seconds_since(t);
 

@@ -43,15 +43,17 @@ using FaceNormal = std::function<Eigen::Vector3d(int face)>;
 
 /// Chains of edges between patches that meet at a crease, fitted with the patches' exact
 /// intersection curve, a line or a circle/arc within `tolerance` (widened on a noisy mesh, whose
-/// chains zigzag), else freeform.
+/// chains zigzag, by half of `border_edge`: the edge length the patches' borders are drawn to,
+/// the working mesh's median edge when the segmentation was made on a coarser copy and mapped
+/// back; 0 for the mesh's own), else freeform.
 std::vector<TracedLine> trace_lines(const MeshArrays& m, const FaceNormal& normal, const Segmentation& seg,
-                                    double min_crease_deg, double tolerance, bool noisy);
+                                    double min_crease_deg, double tolerance, bool noisy, double border_edge = 0);
 
 /// The same with the normals of all faces in an array.
 inline std::vector<TracedLine> trace_lines(const MeshArrays& m, const std::vector<Eigen::Vector3d>& normals,
                                            const Segmentation& seg, double min_crease_deg, double tolerance,
-                                           bool noisy) {
-  return trace_lines(m, [&normals](int f) { return normals[f]; }, seg, min_crease_deg, tolerance, noisy);
+                                           bool noisy, double border_edge = 0) {
+  return trace_lines(m, [&normals](int f) { return normals[f]; }, seg, min_crease_deg, tolerance, noisy, border_edge);
 }
 
 }  // namespace s2c::features

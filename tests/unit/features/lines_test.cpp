@@ -16,12 +16,13 @@ namespace {
 constexpr int kSectors = 96;
 constexpr double kHole = 5.0, kBand = 5.3, kOuter = 9.0, kDepth = 4.0, kDrop = 0.3;
 
-/// A plane (z = 0, kBand ≤ r ≤ kOuter) around a hole of radius kHole, the two joined by a 45°
-/// band from r = kBand at z = 0 down to r = kHole at z = −kDrop (the rounded rim of a scan), the
-/// hole's wall down to z = −kDepth. Faces: plane, then band, then wall, kSectors × 2 each.
-TriangleSoup rim_with_band() {
+/// A plane (z = 0, band ≤ r ≤ kOuter) around a hole of radius kHole, the two joined by a band
+/// from r = band at z = 0 down to r = kHole at z = −drop (the rounded rim of a scan; 45° by
+/// default), the hole's wall down to z = −kDepth. Faces: plane, then band, then wall, kSectors × 2
+/// each.
+TriangleSoup rim_with_band(double band = kBand, double drop = kDrop) {
   TriangleSoup s;
-  const double rings[4][2] = {{kOuter, 0}, {kBand, 0}, {kHole, -kDrop}, {kHole, -kDepth}};
+  const double rings[4][2] = {{kOuter, 0}, {band, 0}, {kHole, -drop}, {kHole, -kDepth}};
   for (const auto& ring : rings)
     for (int k = 0; k < kSectors; ++k) {
       const double a = 2 * M_PI * k / kSectors;
@@ -97,6 +98,21 @@ TEST(FeatureLines, TheShapeAcrossTheBandMustMeetThePlaneNearTheChain) {
   const TracedLine line = rim(trace_lines(m, m.fnormal, seg, 25.0, 0.05, true));
   EXPECT_EQ(line.fit.shape.type, ShapeType::circle);
   EXPECT_NEAR(line.fit.shape.radius, kBand, 1e-6);
+}
+
+TEST(FeatureLines, ThroughAWorkingMeshTheChainsAreAsPreciseAsItsEdge) {
+  // A wider band at 45°: the chain (r = 7.5) lies 2.5 mm off the plane's circle with the wall,
+  // beyond twice the line tolerance on this mesh's own edges (median 1.5 mm). A segmentation made
+  // on a working mesh of 6 mm edges and mapped back draws its borders no closer than that: the
+  // circle is taken.
+  const MeshArrays m = build_arrays(rim_with_band(7.5, 2.5));
+  const Segmentation seg = three_patches(m);
+  const TracedLine own = rim(trace_lines(m, m.fnormal, seg, 25.0, 0.05, true));
+  EXPECT_EQ(own.fit.shape.type, ShapeType::circle);
+  EXPECT_NEAR(own.fit.shape.radius, 7.5, 1e-6);
+  const TracedLine working = rim(trace_lines(m, m.fnormal, seg, 25.0, 0.05, true, 6.0));
+  EXPECT_EQ(working.fit.shape.type, ShapeType::circle);
+  EXPECT_NEAR(working.fit.shape.radius, kHole, 1e-9);
 }
 
 TEST(FeatureLines, ANoisyChainThatTurnsACornerIsSplitThereAndEachSideFitted) {
