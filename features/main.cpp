@@ -56,7 +56,7 @@ int main(int argc, char** argv) {
   app.add_option("--working-vertices", o.working_vertices,
                  "A noisy mesh (not a clean CAD tessellation) with more than three times this many vertices is "
                  "analysed on a coarser copy, and the patches are mapped back onto it: of about this many vertices "
-                 "when the noise is 4% of the edge or more (a dense scan), of a sixth of its vertices when smoother (an "
+                 "when the noise is 4% of the edge or more (a dense scan), of a seventh of its vertices when smoother (an "
                  "undecimated Poisson surface); a million vertices in 1.2-2.6 s instead of 8-19; features narrower "
                  "than two of the copy's cells are lost (0: always the whole mesh; --report lists the copy under "
                  "working_mesh)")

@@ -66,11 +66,15 @@ double vote_edges(bool noisy, double relative_noise) {
 constexpr int kWorkingSlack = 3;
 
 /// A smoother mesh (a Poisson surface: noise 1.1-2.2 % of the edge) resolves more: its working
-/// mesh keeps one vertex in this many (at least working_vertices). The five fixture scans at
-/// Poisson depth 9 (0.40-0.87 M vertices): 42 of 44 primitives, the whole mesh 41, at 2.3-2.6 s
-/// per million vertices instead of 7.9-8.8; an eighth found 13 of the pocket's 14 in 1.99 s, a
-/// tenth 11 (bench/README, "smooth meshes on a working mesh"); 60 k found 4.
-constexpr int kSmoothReduction = 6;
+/// mesh keeps one vertex in this many (at least working_vertices). Stop 50, on the five fixture
+/// scans at Poisson depth 9 (0.40-0.87 M vertices): a sixth found 42 of 44 primitives, the whole
+/// mesh 41, at 2.3-2.6 s per million vertices instead of 7.9-8.8; an eighth 13 of the pocket's
+/// 14, a tenth 11; 60 k found 4. Since stop 54 (lines as precise as the working edge) a seventh:
+/// 43 of 44 primitives on those five and 43 of 44 on five more scans of the parts (seed 2), every
+/// constraint precision ≥ 0.98 (a sixth: 42 and 41 of 44, precision 0.60 and 0.81 on two of the
+/// second five; an eighth lost the bracket's wall top there again), at 6-17 % less time
+/// (bench/README, "a seventh, and lines as precise as the working edge").
+constexpr int kSmoothReduction = 7;
 
 /// The working mesh's target vertices for a mesh of `relative_noise` (noise / median edge), or 0
 /// for none: only noisy meshes larger than kWorkingSlack times `working_vertices` have one.
