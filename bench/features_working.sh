@@ -12,6 +12,9 @@
 #   smooth  the fixture scans (SCANS, default all five) reconstructed by Poisson at octree depth 9
 #           without decimation (0.40-0.87 M vertices; RECON_ARGS, default "--depth 9 --simplify
 #           0"), then repaired: smooth surfaces, noise 1-3 % of the edge. Kept in OUT and reused.
+#           SEED=N (default 1, the bundled scans) records the scans afresh with the virtual
+#           scanner's seed N first, as scripts/make-fixture-scans.sh does with seed 1 (stop 54's
+#           second set: SEED=2).
 # Per mesh it prints one row per mode: vertices, the analysis' time (the report's steps from arrays
 # to groups, s), the whole command's time and peak memory (/usr/bin/time), the working mesh's
 # vertices, and the quality columns of `s2c-bench-features mesh`.
@@ -68,12 +71,22 @@ for section in ${SECTIONS:-noisy smooth}; do
       done
       ;;
     smooth)
+      seed=${SEED:-1}
       for scan in ${SCANS:-plate bracket pocket shaft shaft_laser}; do
-        dir=$out/smooth_$scan
+        src=$here/fixtures/scans/$scan dir=$out/smooth_$scan
+        if [[ $seed != 1 ]]; then
+          src=$out/scans_seed$seed/$scan dir=$out/smooth_seed${seed}_$scan
+          if [[ ! -s $src/stream.yaml ]]; then
+            sensor=(--sensor depth --views 12)
+            [[ $scan == *_laser ]] && sensor=(--sensor laser --views 6)
+            "$bin/scan2cad" simulate "$here/fixtures/parts/${scan%_laser}.stl" --out "$src" "${sensor[@]}" --noise 0.05 \
+              --seed "$seed" --quiet
+          fi
+        fi
         mkdir -p "$dir"
         if [[ ! -s $dir/repaired.ply ]]; then
           # shellcheck disable=SC2086
-          "$bin/scan2cad" reconstruct "$here/fixtures/scans/$scan" -o "$dir/mesh.ply" -q ${RECON_ARGS:---depth 9 --simplify 0} \
+          "$bin/scan2cad" reconstruct "$src" -o "$dir/mesh.ply" -q ${RECON_ARGS:---depth 9 --simplify 0} \
             2>"$dir/reconstruct.log"
           "$bin/scan2cad" repair "$dir/mesh.ply" -o "$dir/repaired.ply" -q 2>"$dir/repair.log"
         fi
