@@ -8,8 +8,8 @@
 // and whose numbers are usable
 // (finite, a non-zero direction, radius / length > 0, cone half angle in (0°, 90°)); with
 // min_patch_area set, not a line (straight, arc or circle) within the position tolerance long,
-// nor a straight one touching planes only, two or more, in the direction of none of their edges. Feature order
-// is patches then lines, each in file order; members are listed in that order.
+// nor a straight one touching planes only, two or more, in the direction of none of their edges.
+// Feature order is patches then lines, each in file order; members are listed in that order.
 //
 // Tolerances: angles `angle_tol_deg` (parallel: |cos| ≥ cos tol, perpendicular: |cos| ≤ sin tol);
 // positions `length_tol` or, when 0, 0.5 % of `diagonal`; radii `radius_rel_tol` relative;

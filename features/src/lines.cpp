@@ -133,8 +133,8 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const FaceNormal& norma
   // coarser working mesh and mapped back follows the crease only to within a working edge (the
   // mapping moves a border by up to one), however fine the mesh is. With the fine mesh's edge the
   // scans reconstructed at Poisson depth 9 (0.11 mm edges, the working mesh's 0.24 mm) had the
-  // chains along their rounded hole rims 0.2 mm off the plane ∩ cylinder circle, twice the
-  // tolerance: the bracket's rims fell into arcs of 4.2-5.2 mm for a 5 mm hole.
+  // chains along their rounded hole rims 0.2 mm off the plane ∩ cylinder circle, beyond twice the
+  // line tolerance: the bracket's rims fell into arcs of 2.9-5.2 mm for a 5 mm hole.
   const double line_tol =
       noisy ? std::hypot(tolerance, 0.5 * border) : std::max(tolerance, 0.25 * m.median_edge);
   // The two patches' intersection is the CAD edge itself; on a reconstructed scan the crease is

@@ -24,7 +24,8 @@ struct ConstraintOptions {
   /// two patches it touches, each of at least 5 × this area: a scan's edge along its rounding.
   /// When it is > 0, lines no longer than the position tolerance (a corner's stub: straight, or
   /// an arc or circle by its curve's length) take no part either, nor straight lines touching
-  /// only planes, two or more, in the direction of none of their edges (across a rounded corner). 0: every patch takes part.
+  /// only planes, two or more, in the direction of none of their edges (across a rounded
+  /// corner). 0: every patch takes part.
   double min_patch_area = 0.0;
   /// fixed_angle needs the patches to meet at least at this angle (degrees; 0: above the angle
   /// tolerance). On scan meshes the analysis sets it to the smallest crease angle it detects:
