@@ -60,7 +60,6 @@ bool intersection_curve(const Shape& a, const Shape& b, const std::vector<Eigen:
 
 std::vector<TracedLine> trace_lines(const MeshArrays& m, const FaceNormal& normal, const Segmentation& seg,
                                     double min_crease_deg, double tolerance, bool noisy, double border_edge) {
-  const double border = border_edge > 0 ? border_edge : m.median_edge;
   const int ne = static_cast<int>(m.edges.size()), nv = m.vertices();
   const double cos_min = std::cos(min_crease_deg * M_PI / 180.0);
   // Line edges and the (sorted) pair of patches each one separates, decided per edge in parallel
@@ -135,6 +134,7 @@ std::vector<TracedLine> trace_lines(const MeshArrays& m, const FaceNormal& norma
   // scans reconstructed at Poisson depth 9 (0.11 mm edges, the working mesh's 0.24 mm) had the
   // chains along their rounded hole rims 0.2 mm off the plane ∩ cylinder circle, beyond twice the
   // line tolerance: the bracket's rims fell into arcs of 2.9-5.2 mm for a 5 mm hole.
+  const double border = border_edge > 0 ? border_edge : m.median_edge;
   const double line_tol =
       noisy ? std::hypot(tolerance, 0.5 * border) : std::max(tolerance, 0.25 * m.median_edge);
   // The two patches' intersection is the CAD edge itself; on a reconstructed scan the crease is

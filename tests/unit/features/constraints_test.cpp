@@ -784,13 +784,13 @@ std::string add_patch(FeatureSet& f, ShapeType type, const Vector3d& point, cons
   return p.id;
 }
 
-/// Appends the straight line from `from` to `to`, adjacent to the patches `touches`, and returns
-/// its id. Its chain is `vertices`, or two vertices no other line has.
-std::string add_line(FeatureSet& f, const Vector3d& from, const Vector3d& to, const std::vector<std::string>& touches,
-                     std::vector<int> vertices = {}) {
+/// Appends a line of `shape`, adjacent to the patches `touches`, and returns its id. Its chain is
+/// `vertices`, or two vertices no other line has.
+std::string append_line(FeatureSet& f, const Shape& shape, const std::vector<std::string>& touches,
+                        std::vector<int> vertices) {
   Line l;
   l.id = "L" + std::to_string(f.lines.size());
-  l.shape = make_shape(ShapeType::line, from, to - from, 0, (to - from).norm());
+  l.shape = shape;
   l.vertices = vertices.empty() ? std::vector<int>{static_cast<int>(2 * f.lines.size()), static_cast<int>(2 * f.lines.size() + 1)}
                                 : std::move(vertices);
   for (const auto& p : touches) f.adjacency.emplace_back(p, l.id);
@@ -798,11 +798,20 @@ std::string add_line(FeatureSet& f, const Vector3d& from, const Vector3d& to, co
   return l.id;
 }
 
+/// Appends the straight line from `from` to `to` (append_line).
+std::string add_line(FeatureSet& f, const Vector3d& from, const Vector3d& to, const std::vector<std::string>& touches,
+                     std::vector<int> vertices = {}) {
+  return append_line(f, make_shape(ShapeType::line, from, to - from, 0, (to - from).norm()), touches, std::move(vertices));
+}
+
+/// Appends the straight line from a to b, its chain from vertex va over a vertex of its own to vb.
+void add_segment(FeatureSet& f, const Vector3d& a, const Vector3d& b, int va, int vb) {
+  add_line(f, a, b, {}, {va, 100 + static_cast<int>(f.lines.size()), vb});
+}
+
 TEST(ConstraintsTest, CollinearAndConnectedLines) {
   FeatureSet f;
-  auto seg = [&](Vector3d a, Vector3d b, int va, int vb) {
-    add_line(f, a, b, {}, {va, 100 + static_cast<int>(f.lines.size()), vb});  // a vertex of its own between
-  };
+  auto seg = [&](Vector3d a, Vector3d b, int va, int vb) { add_segment(f, a, b, va, vb); };
   seg({0, 0, 0}, {10, 0, 0}, 0, 1);
   seg({20, 0, 0}, {35, 0, 0}, 2, 3);  // collinear with L0
   seg({10, 0, 0}, {10, 10, 0}, 1, 4);  // connected to L0 at vertex 1, square to it
@@ -824,9 +833,7 @@ TEST(ConstraintsTest, CollinearAndConnectedLines) {
 TEST(ConstraintsTest, LinesNoLongerThanThePositionToleranceTakeNoPart) {
   auto corner = [](double stub, bool scan) {
     FeatureSet f;
-    auto seg = [&](Vector3d a, Vector3d b, int va, int vb) {
-      add_line(f, a, b, {}, {va, 100 + static_cast<int>(f.lines.size()), vb});  // a vertex of its own between
-    };
+    auto seg = [&](Vector3d a, Vector3d b, int va, int vb) { add_segment(f, a, b, va, vb); };
     const Vector3d c(0, 0, 40);
     seg({0, 0, 6}, c, 0, 1);                                            // the long edge up to the corner
     seg(c, c + stub * Vector3d(0, 0.82, 0.58).normalized(), 1, 2);      // two stubs from its end,
@@ -855,18 +862,15 @@ TEST(ConstraintsTest, LinesNoLongerThanThePositionToleranceTakeNoPart) {
 /// it) through `degrees`, with the chain `vertices`, and returns its id.
 std::string add_arc(FeatureSet& f, const Vector3d& centre, const Vector3d& normal, const Vector3d& from, double degrees,
                     std::vector<int> vertices) {
-  Line l;
-  l.id = "L" + std::to_string(f.lines.size());
-  l.shape.type = ShapeType::arc;
-  l.shape.point = centre;
-  l.shape.dir = normal.normalized();
-  l.shape.radius = (from - centre).norm();
-  l.shape.start = from;
-  l.shape.end = centre + Eigen::AngleAxisd(degrees * M_PI / 180.0, l.shape.dir) * (from - centre);
-  l.shape.angle_deg = degrees;
-  l.vertices = std::move(vertices);
-  f.lines.push_back(l);
-  return l.id;
+  Shape arc;
+  arc.type = ShapeType::arc;
+  arc.point = centre;
+  arc.dir = normal.normalized();
+  arc.radius = (from - centre).norm();
+  arc.start = from;
+  arc.end = centre + Eigen::AngleAxisd(degrees * M_PI / 180.0, arc.dir) * (from - centre);
+  arc.angle_deg = degrees;
+  return append_line(f, arc, {}, std::move(vertices));
 }
 
 // The same for an arc: a few mesh edges round a scan's rounded corner fit a circle of a tenth of
